@@ -1,0 +1,35 @@
+"""Observable names per analysis path, with CF ``long_name`` and ``units``.
+
+All quantities are non-dimensional for the slider system (force in units of
+``k L``, velocity in ``omega_n L``, time in ``tau``) and SI for the contact system.
+"""
+from __future__ import annotations
+
+SIMULATE = {
+    "v_mean": ("mean slider velocity after the transient", "1"),
+    "v_slow_p2p": ("peak-to-peak of the dither-period-averaged slider velocity", "1"),
+    "F_mean": ("mean friction force after the transient", "1"),
+    "stick_fraction": ("fraction of time sticking (alpha == 0)", "1"),
+    "presliding_fraction": ("fraction of time pre-sliding (0 < alpha < 1)", "1"),
+    "slip_fraction": ("fraction of time sliding (alpha == 1)", "1"),
+    "long_stick_fraction": ("fraction of time in sticking runs longer than long_stick", "1"),
+    "max_stick": ("longest uninterrupted sticking run", "tau"),
+}
+AVERAGED = {
+    "F_eff": ("averaged effective friction at slip velocity v_ref", "1"),
+    "max_real_eig": ("largest real part of the averaged Jacobian's eigenvalues", "1/tau"),
+    "stable": ("averaged equilibrium stable (1) or unstable (0)", "1"),
+}
+HBM = {
+    "F_mean": ("mean friction force over one period", "N"),
+    "F_min": ("least friction force over one period", "N"),
+    "F_max": ("largest friction force over one period", "N"),
+    "F_at_vmin": ("friction force at the instant of least velocity", "N"),
+    "loop_area": ("closed integral of F dv over one period", "N m/s"),
+}
+BY_PATH = {"simulate": SIMULATE, "averaged": AVERAGED, "hbm": HBM}
+
+
+def describe(path: str, name: str) -> tuple[str, str]:
+    """(long_name, units) of output ``name`` on analysis ``path``."""
+    return BY_PATH[path][name]

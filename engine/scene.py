@@ -1,0 +1,61 @@
+"""Scene: the compile-time choices of a kernel (what to simulate, not with which numbers).
+
+Kernels are specialised per Scene, so an effect a scene does not call for (Stribeck,
+bristle damping, viscous term, slow force, an observable) costs nothing at run time.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+from . import params as P
+from .dither import KINDS as DITHER_KINDS
+from .friction import LAWS
+
+SYSTEMS = ("slider", "contact")
+ANALYSIS_METHODS = ("averaged", "hbm")
+
+
+@dataclass(frozen=True)
+class Scene:
+    system: str = "slider"
+    friction: str = "lugre"
+    dither: str = "square-velocity"
+    method: str = "dopri5"
+    stribeck: bool = True
+    bristle_damping: bool = True
+    viscous: bool = True
+    slow_force: bool = True
+    outputs: tuple[str, ...] = ()
+
+    def __post_init__(self):
+        if self.system not in SYSTEMS:
+            raise ValueError(f"system must be one of {SYSTEMS}, got {self.system!r}")
+        if self.friction not in LAWS:
+            raise ValueError(f"friction must be one of {LAWS}, got {self.friction!r}")
+        if self.dither not in DITHER_KINDS:
+            raise ValueError(f"dither must be one of {DITHER_KINDS}, got {self.dither!r}")
+
+    @property
+    def path(self) -> str:
+        """'simulate', 'averaged' or 'hbm'."""
+        return self.method if self.method in ANALYSIS_METHODS else "simulate"
+
+    @classmethod
+    def from_params(cls, p, *, system="slider", friction="lugre", dither="square-velocity",
+                    method="dopri5", outputs=(), grid_vd=None) -> "Scene":
+        """Scene whose effect flags are off exactly where ``p`` makes them vanish.
+
+        ``grid_vd`` -- the swept vd values, if any (bristle damping matters when
+        sigma1_hat != 0 whatever vd is; vd only scales it).
+        """
+        return cls(
+            system=system, friction=friction, dither=dither, method=method,
+            stribeck=bool(p[P.FS] != p[P.FC]),
+            bristle_damping=bool(p[P.SIGMA1] != 0.0),
+            viscous=bool(p[P.SIGMA2] != 0.0),
+            slow_force=bool(p[P.SLOW_A] != 0.0 and system == "slider"),
+            outputs=tuple(outputs),
+        )
+
+    def with_(self, **changes) -> "Scene":
+        return replace(self, **changes)
