@@ -1,0 +1,279 @@
+"""The result cube of a sweep (DESIGN.md §4): build it, fill it, publish it, open it.
+
+A cube is an ``xarray.Dataset`` with dims and coordinates exactly ``AXES`` =
+``("W", "omega", "v_ref", "v_d")`` (length 1 where an axis is not swept) and:
+
+- one float64 variable per requested output (NaN until computed);
+- ``status`` int8, a CF flag variable: 0 ok, 1 not yet computed, 2 failed, 3 non-finite
+  (the codes of ``engine.status``, repeated here because ``store`` never imports
+  ``engine``; a test checks they agree);
+- ``cost_s`` float64 seconds, ``steps`` and ``evals`` int64 per point.
+
+Points are addressed by a *flat index* in C order over ``AXES``
+(``np.ravel_multi_index((iW, iomega, iv_ref, iv_d), shape)``); ``grid_points`` turns
+flat indices into ``(n, 4)`` parameter rows in the column order of ``AXES``.
+
+On disk it is one HDF5/netCDF4 file written by ``publish`` (zlib, atomic rename) and
+readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
+"""
+from __future__ import annotations
+
+import importlib.metadata
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Mapping
+
+import numpy as np
+import xarray as xr
+
+from . import attrs as A
+from .layout import atomic_write, remove_stale_temps
+
+AXES = ("W", "omega", "v_ref", "v_d")
+AXIS_META = {  # axis -> (long_name, default units); the contact system overrides units
+    "W": ("dither velocity amplitude", "1"),
+    "omega": ("dither angular frequency", "rad per unit tau"),
+    "v_ref": ("reference (slip) velocity", "1"),
+    "v_d": ("bristle-damping characteristic velocity vd", "1"),
+}
+OK, NOT_COMPUTED, FAILED, NON_FINITE = 0, 1, 2, 3
+STATUS_MEANINGS = ("ok", "not_yet_computed", "failed", "non_finite")
+BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
+    "status": (np.int8, NOT_COMPUTED, "point status", None),
+    "cost_s": (np.float64, 0.0, "wall-clock cost of the point", "s"),
+    "steps": (np.int64, 0, "accepted integrator steps", "1"),
+    "evals": (np.int64, 0, "right-hand-side evaluations", "1"),
+}
+RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index"}
+COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
+
+
+def _check_axis(name: str, values) -> np.ndarray:
+    arr = np.asarray(values, dtype=np.float64)
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"coords[{name!r}] must be a non-empty 1-D list of numbers, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"coords[{name!r}] must be finite, got {arr.tolist()}")
+    if arr.size > 1 and not np.all(np.diff(arr) > 0):
+        raise ValueError(f"coords[{name!r}] must be strictly increasing (sort it, drop duplicates), got {arr.tolist()}")
+    return arr
+
+
+def _axis_coords(coords, axis_units, axis_long_names) -> dict[str, xr.Variable]:
+    unknown = set(coords) - set(AXES)
+    missing = [a for a in AXES if a not in coords]
+    if unknown or missing:
+        raise ValueError(f"coords must have exactly the axes {AXES}; missing {missing}, unknown {sorted(unknown)}")
+    for label, override in (("axis_units", axis_units), ("axis_long_names", axis_long_names)):
+        bad = set(override or {}) - set(AXES)
+        if bad:
+            raise ValueError(f"{label}: unknown axis {sorted(bad)}; axes are {AXES}")
+    out = {}
+    for a in AXES:
+        long_name = (axis_long_names or {}).get(a, AXIS_META[a][0])
+        units = (axis_units or {}).get(a, AXIS_META[a][1])
+        out[a] = xr.Variable(a, _check_axis(a, coords[a]), {"long_name": long_name, "units": units})
+    return out
+
+
+def _bookkeeping(shape: tuple[int, ...]) -> dict[str, xr.Variable]:
+    out = {}
+    for name, (dtype, initial, long_name, units) in BOOKKEEPING.items():
+        attrs = {"long_name": long_name}
+        if name == "status":
+            attrs["flag_values"] = np.arange(len(STATUS_MEANINGS), dtype=np.int8)
+            attrs["flag_meanings"] = " ".join(STATUS_MEANINGS)
+        else:
+            attrs["units"] = units
+        out[name] = xr.Variable(AXES, np.full(shape, initial, dtype=dtype), attrs)
+    return out
+
+
+def _global_attrs(attrs: Mapping | None) -> dict:
+    out = {A.CONVENTIONS: "CF-1.8", A.CREATED: datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    try:
+        out[A.VERSION] = importlib.metadata.version("ditherlab")
+    except importlib.metadata.PackageNotFoundError:
+        out[A.VERSION] = "unknown"
+    out.update(attrs or {})
+    return A.encode(out)
+
+
+def empty_cube(
+    coords: Mapping[str, np.ndarray],
+    variables: Mapping[str, tuple[str, str]],
+    attrs: Mapping | None = None,
+    axis_units: Mapping[str, str] | None = None,
+    axis_long_names: Mapping[str, str] | None = None,
+) -> xr.Dataset:
+    """A cube with every point not yet computed: outputs NaN, status 1, costs 0.
+
+    Parameters
+    ----------
+    coords
+        Axis name -> strictly increasing 1-D values, for each of ``AXES`` (a
+        length-1 list for an axis that is not swept).
+    variables
+        Output name -> ``(long_name, units)``, e.g. ``engine.outputs.SIMULATE``.
+    attrs
+        Global attributes (see ``store.attrs``: ``sweep_id``, ``name``, ``spec``,
+        ``engine_settings`` ...). Non-scalars are stored as canonical JSON strings;
+        ``created``, ``ditherlab_version`` and ``Conventions`` are added when missing.
+    axis_units, axis_long_names
+        Per-axis overrides of ``AXIS_META`` (the contact system is SI: ``"m/s"``).
+
+    Returns
+    -------
+    xarray.Dataset
+        In memory, dims ``AXES``; fill it with ``fill`` and write it with ``publish``.
+    """
+    axes = _axis_coords(coords, axis_units, axis_long_names)
+    shape = tuple(axes[a].size for a in AXES)
+    data = {}
+    for name, meta in variables.items():
+        if name in RESERVED:
+            raise ValueError(f"variables: {name!r} is a reserved name ({sorted(RESERVED)}); rename the output")
+        if not (isinstance(meta, (tuple, list)) and len(meta) == 2 and all(isinstance(m, str) for m in meta)):
+            raise ValueError(f"variables[{name!r}] must be (long_name, units) strings, got {meta!r}")
+        data[name] = xr.Variable(AXES, np.full(shape, np.nan), {"long_name": meta[0], "units": meta[1]})
+    data.update(_bookkeeping(shape))
+    return xr.Dataset(data, coords=axes, attrs=_global_attrs(attrs))
+
+
+def output_names(ds: xr.Dataset) -> list[str]:
+    """The cube's output variables (every data variable except the bookkeeping ones)."""
+    return [str(v) for v in ds.data_vars if v not in BOOKKEEPING]
+
+
+def shape_of(ds: xr.Dataset) -> tuple[int, ...]:
+    """Grid shape in ``AXES`` order."""
+    return tuple(int(ds.sizes[a]) for a in AXES)
+
+
+def check_index(ds: xr.Dataset, flat_index) -> np.ndarray:
+    """``flat_index`` as a 1-D int64 array, after checking it addresses points of ``ds``."""
+    idx = np.asarray(flat_index)
+    size = int(np.prod(shape_of(ds)))
+    if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
+        raise ValueError(f"flat_index must be a 1-D integer array, got dtype {idx.dtype} shape {idx.shape}")
+    if idx.size and (idx.min() < 0 or idx.max() >= size):
+        raise ValueError(f"flat_index must lie in [0, {size}) for a cube of shape {shape_of(ds)}, "
+                         f"got range [{idx.min()}, {idx.max()}]")
+    return idx.astype(np.int64)
+
+
+def grid_points(ds: xr.Dataset, flat_index=None) -> np.ndarray:
+    """Parameter rows ``(n, 4)`` float64 of the points ``flat_index`` (all by default).
+
+    Columns follow ``AXES`` (the engine's ``POINT_AXES`` order: W, omega, v_ref, vd).
+    """
+    size = int(np.prod(shape_of(ds)))
+    idx = np.arange(size) if flat_index is None else check_index(ds, flat_index)
+    multi = np.unravel_index(idx, shape_of(ds))
+    return np.column_stack([ds[a].values[m] for a, m in zip(AXES, multi)]).astype(np.float64)
+
+
+def pending_index(ds: xr.Dataset) -> np.ndarray:
+    """Flat indices of the points whose status is not ok (to resume a sweep)."""
+    return np.flatnonzero(ds["status"].values.reshape(-1) != OK)
+
+
+def status_counts(ds: xr.Dataset) -> dict[str, int]:
+    """Number of points per status meaning, e.g. ``{"ok": 90, "not_yet_computed": 10, ...}``."""
+    counts = np.bincount(ds["status"].values.reshape(-1).astype(np.int64), minlength=len(STATUS_MEANINGS))
+    return {m: int(c) for m, c in zip(STATUS_MEANINGS, counts)}
+
+
+def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarray]:
+    outputs = output_names(ds)
+    missing, extra = sorted(set(outputs) - set(values)), sorted(set(values) - set(outputs))
+    if missing or extra:
+        raise ValueError(f"fill: values must have exactly the cube's outputs {outputs}; missing {missing}, unknown {extra}")
+    columns = {**values, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
+    columns = {k: np.asarray(v) for k, v in columns.items()}
+    for name, col in columns.items():
+        if col.shape != (n,):
+            raise ValueError(f"fill: {name} has shape {col.shape}, expected ({n},) like flat_index")
+    bad = ~np.isin(columns["status"], np.arange(len(STATUS_MEANINGS)))
+    if bad.any():
+        raise ValueError(f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got {np.unique(columns['status'][bad]).tolist()}")
+    return columns
+
+
+def fill(ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals) -> None:
+    """Write the results of some points into ``ds`` in place.
+
+    Parameters
+    ----------
+    ds
+        A cube from ``empty_cube`` or ``open_cube`` (in memory).
+    flat_index
+        ``(n,)`` int, C-order flat indices over ``AXES``.
+    values
+        Output name -> ``(n,)`` float; exactly the cube's outputs.
+    status
+        ``(n,)`` int codes 0..3; ``cost_s`` ``(n,)`` seconds; ``steps``, ``evals`` ``(n,)`` int.
+
+    Everything is checked before anything is written, so a refused call leaves ``ds``
+    unchanged.
+    """
+    idx = check_index(ds, flat_index)
+    columns = _columns(ds, idx.size, values, status, cost_s, steps, evals)
+    for name, col in columns.items():
+        var = ds.variables[name]
+        var.load()  # numpy-backed from here on, so np.put writes into the dataset itself
+        np.put(var.data, idx, col)
+
+
+def _check_layout(ds: xr.Dataset, where: str) -> None:
+    if set(ds.dims) != set(AXES) or "status" not in ds or any(a not in ds.coords for a in AXES):
+        raise ValueError(f"{where}: not a ditherlab cube: dims {tuple(ds.dims)} (expected {AXES}), "
+                         f"variables {list(ds.data_vars)} (expected 'status' among them)")
+    for name, var in ds.data_vars.items():
+        if var.dims != AXES:
+            raise ValueError(f"{where}: variable {name!r} has dims {var.dims}, expected {AXES}")
+
+
+def _encoding(ds: xr.Dataset) -> dict[str, dict]:
+    enc = {}
+    for name, var in ds.data_vars.items():
+        enc[name] = dict(COMPRESSION)
+        if np.issubdtype(var.dtype, np.integer):
+            enc[name]["_FillValue"] = None  # a fill value would make xarray decode int8 as float
+    return enc
+
+
+def publish(ds: xr.Dataset, path) -> Path:
+    """Write ``ds`` to ``path`` atomically (temporary file, fsync, rename, fsync folder).
+
+    A reader of ``path`` sees the previous file or the new one, never a torn file; a
+    writer killed before the rename leaves the old file intact. Temporary files of
+    dead writers in the same folder are removed first. Returns ``path``.
+    """
+    path = Path(path)
+    _check_layout(ds, f"publish({path})")
+    out = ds.copy(deep=False)
+    for var in out.variables.values():
+        var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
+    if path.parent.exists():
+        remove_stale_temps(path.parent)
+    return atomic_write(path, lambda tmp: out.to_netcdf(tmp, engine="h5netcdf", encoding=_encoding(out)))
+
+
+def open_cube(path) -> xr.Dataset:
+    """Read a cube fully into memory and close the file.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no file at ``path``.
+    ValueError
+        If the file is not a ditherlab cube (dims other than ``AXES``, no ``status``).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no cube at {path}; has the sweep been published yet?")
+    with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
+        ds = f.load()
+    _check_layout(ds, f"open_cube({path})")
+    return ds
