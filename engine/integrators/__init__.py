@@ -1,0 +1,71 @@
+"""Time integrators: one method per module, picked by name from :data:`METHODS`.
+
+Protocol (how to add a method, e.g. a stiff Rosenbrock or exponential scheme)
+-----------------------------------------------------------------------------
+A method is *data + a kernel factory* in its own module ``engine/integrators/<name>.py``:
+
+``NAME: str``
+    literature name, the key in :data:`METHODS` (``"rk4"``, ``"dopri5"``, ...).
+``ORDER: int``
+    order of the propagated solution (the convergence tests check the log2-slope).
+``ADAPTIVE: bool``
+    True: the method reads ``cfg[CFG_RTOL]``, ``cfg[CFG_ATOL]``; False: it takes fixed
+    steps of nominal size ``cfg[CFG_H]`` (the driver computes it from
+    ``Settings.steps_per_period`` so that it divides the dither (half-)period).
+``TABLEAU``
+    frozen coefficients (:class:`engine.integrators.tableau.ButcherTableau`, which checks
+    its own sum rules when built), or ``None``.
+``make_stepper(problem: Problem) -> Stepper``
+    the kernel factory. ``problem`` (:class:`engine.integrators.problem.Problem`) carries the
+    scene's njit pieces as compile-time constants:
+
+    - ``n`` state size, ``n_err`` the leading components under error control (the rest are
+      quadrature states such as the running integral of F, never used for step control);
+    - ``rhs(t, y, p, sq, dy)`` the right-hand side (engine.systems), ``jac`` is *not* given:
+      a stiff method builds its own (finite differences of ``rhs`` or its own analytic form);
+    - ``n_events`` and ``events(t, y, p, sq, g)``: kink functions; a sign change of ``g[i]``
+      marks a corner of the right-hand side (``|u| = 0``, elasto-plastic alpha boundaries,
+      Karnopp band edges). Adaptive methods should step exactly onto them (see dopri5);
+    - ``observe(t0, y0, t1, y1, ymid, p, sq, obs)``: call after every accepted step
+      (``ymid`` = state at ``(t0 + t1) / 2`` from the method's dense output);
+    - ``record``: True when step end times must be appended to ``rec`` (API only).
+
+    It returns ``Stepper(alloc, segment)``, two njit functions:
+
+    ``work = alloc()``
+        all scratch storage of one point (any numba-typable object, e.g. a tuple of arrays),
+        allocated once per point, reused by every segment: no allocation in the step loop.
+    ``status = segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec)``
+        integrate ``y`` (float64 ``(n,)``, updated in place) from ``t0`` to *exactly* ``t1``:
+        the last step ends at ``t = t1`` assigned, never accumulated. The dither sign ``sq``
+        (+-1, square wave) is constant on the segment. ``fresh`` is ``FRESH_START`` on the
+        first segment of a point (select an initial step), ``FRESH_SWITCH`` after a
+        square-wave switch (``sq`` changed: re-evaluate any FSAL/cached stage) and
+        ``FRESH_NONE`` at other stops (caches stay valid). Step-size state carried between
+        segments lives in ``work``. Counters go to ``ctr[CTR_STEPS]``, ``ctr[CTR_REJECTED]``,
+        ``ctr[CTR_EVALS]``; with ``problem.record`` each accepted step's end time goes to
+        ``rec[ctr[CTR_NREC]]`` (stop recording when ``rec`` is full). Returns an
+        ``engine.status`` code: ``OK``, ``FAILED`` (``ctr[CTR_STEPS] + ctr[CTR_REJECTED]``
+        exceeded ``cfg[CFG_MAX_STEPS]`` or the step underflowed) or ``NON_FINITE``.
+
+The shared driver (:mod:`engine.integrators.driver`) owns everything that is not the
+method: the stop grid (square-wave switches ``k * (pi / omega)``, ``t_transient``,
+``t_end``, and period boundaries when an observable needs them), the sign ``sq`` per
+segment, the observer's stop hook, and the status. Register a new method by importing
+its module below and adding it to :data:`METHODS`; ``engine.kernels`` then builds
+``Scene(method=NAME)`` kernels with it and every batch/API path works unchanged.
+"""
+from __future__ import annotations
+
+from .problem import (CFG_ATOL, CFG_H, CFG_MAX_STEPS, CFG_RTOL, CFG_SIZE, CTR_EVALS,
+                      CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS, FRESH_NONE, FRESH_START,
+                      FRESH_SWITCH, Problem, Stepper)
+
+#: name -> method module (see the protocol above)
+METHODS: dict = {}  # rk4, dopri5 land in the next commits
+
+__all__ = [
+    "CFG_ATOL", "CFG_H", "CFG_MAX_STEPS", "CFG_RTOL", "CFG_SIZE", "CTR_EVALS", "CTR_NREC",
+    "CTR_REJECTED", "CTR_SIZE", "CTR_STEPS", "FRESH_NONE", "FRESH_START", "FRESH_SWITCH",
+    "METHODS", "Problem", "Stepper",
+]
