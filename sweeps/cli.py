@@ -1,0 +1,224 @@
+"""The ``ditherlab`` command line (DESIGN.md §5).
+
+    ditherlab submit SPEC.toml [--store DIR] [--scheduler tcp://HOST:PORT | --workers N]
+    ditherlab status [SWEEP]
+    ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
+    ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE.png
+    ditherlab plan SPEC.toml
+
+Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments) was refused.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+from .spec import DEFAULT_MAX_POINTS, SpecError, load_spec
+
+EXIT_FAILED, EXIT_REFUSED = 1, 2
+
+
+class UserError(Exception):
+    """A lookup or argument problem, reported as one line without a traceback."""
+
+
+def store_root(arg: str | None) -> Path:
+    return Path(arg or os.environ.get("DITHERLAB_STORE") or "ditherlab-store")
+
+
+def parse_sel(items: list[str] | None) -> dict[str, float]:
+    sel = {}
+    for item in items or ():
+        axis, eq, value = item.partition("=")
+        if not eq:
+            raise UserError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
+        try:
+            sel[axis.strip()] = float(value)
+        except ValueError:
+            raise UserError(f"--sel {axis}: value must be a number, got {value!r}") from None
+    return sel
+
+
+def resolve_sweep(root: Path, key: str) -> tuple[str, Path]:
+    """A sweep id, id prefix or name -> (sweep id, cube path)."""
+    import store
+
+    row = store.Catalogue(root).find(key)
+    if row is None:
+        raise UserError(f"no sweep {key!r} in store {root} (see `ditherlab status`)")
+    cube = store.SweepDir(root, row["sweep_id"]).cube
+    if not cube.exists():
+        raise UserError(f"sweep {row['sweep_id']} has no cube yet at {cube}; submit it again")
+    return row["sweep_id"], cube
+
+
+# --- commands --------------------------------------------------------------------------
+
+def cmd_submit(args) -> int:
+    from .plan import make_plan
+    from .run import submit
+
+    spec = load_spec(args.spec, max_points=args.max_points)
+    plan = make_plan(spec)
+    root = store_root(args.store)
+    print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
+          f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
+    res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
+                 progress=not args.quiet)
+    verb = "already complete" if res.blocks_run == 0 else f"ran {res.blocks_run} blocks"
+    print(f"{res.sweep_id}: {res.state}, {verb}; {res.n_ok}/{res.n_points} ok, "
+          f"{res.n_failed} failed; {res.wall_s:.1f} s\ncube: {res.cube_path}")
+    return 0 if res.state == "done" else EXIT_FAILED
+
+
+def cmd_status(args) -> int:
+    import store
+
+    cat = store.Catalogue(store_root(args.store))
+    if args.sweep:
+        row = cat.find(args.sweep)
+        if row is None:
+            raise UserError(f"no sweep {args.sweep!r} in store {store_root(args.store)}")
+        for key, value in row.items():
+            if key != "spec_json":
+                print(f"{key:>14}: {value}")
+        return 0
+    rows = cat.list()
+    if not rows:
+        print(f"no sweeps in {store_root(args.store)}")
+        return 0
+    print(f"{'sweep':<13}{'name':<24}{'state':<9}{'points':>8}{'done':>8}{'failed':>8}  updated")
+    for r in rows:
+        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{r['state']:<9}{r['n_points']:>8}"
+              f"{r['done_points']:>8}{r['failed_points']:>8}  {r['updated']}")
+    return 0
+
+
+def cmd_query(args) -> int:
+    import store
+
+    root = store_root(args.store)
+    _, cube = resolve_sweep(root, args.sweep)
+    ds = store.open_cube(cube)
+    try:
+        df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    if args.format == "csv":
+        sys.stdout.write(df.to_csv(index=False))
+    elif args.format == "json":
+        print(json.dumps(json.loads(df.to_json(orient="records")), indent=1))
+    else:
+        print(df.to_string(index=False))
+    return 0
+
+
+def cmd_map(args) -> int:
+    import store
+
+    root = store_root(args.store)
+    _, cube = resolve_sweep(root, args.sweep)
+    ds = store.open_cube(cube)
+    draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
+            "friction": store.friction_curves}[args.kind]
+    try:
+        draw(ds, args.output, sel=parse_sel(args.sel))
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    print(f"wrote {args.output}")
+    return 0
+
+
+def cmd_plan(args) -> int:
+    from .calibrate import estimates, format_seconds
+    from .plan import make_plan
+
+    spec = load_spec(args.spec, max_points=args.max_points)
+    plan = make_plan(spec)
+    shape = " x ".join(f"{a}={len(v)}" for a, v in plan.coords.items())
+    print(f"sweep      {plan.sweep_id}  '{spec.name}'")
+    print(f"points     {plan.n_points}  ({shape})  in {len(plan.blocks)} interleaved blocks")
+    print(f"path       {plan.path}" + ("" if plan.path == "simulate" else
+                                       "  (no time integration)"))
+    print(f"scene      system={spec.system} friction={spec.friction} dither={plan.scene.dither}")
+    if plan.path == "simulate":
+        on = [k for k, v in plan.effects().items() if v]
+        off = [k for k, v in plan.effects().items() if not v]
+        print(f"effects    compiled in: {', '.join(on) or '-'}; left out: {', '.join(off) or '-'}")
+        s = plan.numerics.settings
+        print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
+              f"atol={s.atol:g}; steps land on every square-wave switch")
+    print(f"outputs    {', '.join(plan.outputs)}")
+    print(f"estimates  (calibrated now on this machine, {args.workers} workers)")
+    for est in estimates(spec, workers=args.workers):
+        print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
+              f"per point  ->  {format_seconds(est.wall_s)} wall")
+    return 0
+
+
+# --- parser ----------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="ditherlab", description="Parameter sweeps of friction "
+                                 "dynamics under dither: submit, inspect, query, draw.")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--store", help="store folder (default $DITHERLAB_STORE or "
+                        "./ditherlab-store)")
+    sub = ap.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("submit", parents=[common], help="run a sweep spec (resumes a partial one)")
+    p.add_argument("spec", help="spec file (.toml or .json)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
+    where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, help="point budget")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_submit)
+
+    p = sub.add_parser("status", parents=[common], help="list sweeps, or show one")
+    p.add_argument("sweep", nargs="?")
+    p.set_defaults(func=cmd_status)
+
+    p = sub.add_parser("query", parents=[common], help="print a cube's values")
+    p.add_argument("sweep")
+    p.add_argument("--var", help="variable (default: all outputs)")
+    p.add_argument("--sel", action="append", metavar="AXIS=VALUE", help="nearest-point selection")
+    p.add_argument("--format", choices=("table", "csv", "json"), default="table")
+    p.set_defaults(func=cmd_query)
+
+    p = sub.add_parser("map", parents=[common], help="draw a map PNG from a cube")
+    p.add_argument("sweep")
+    p.add_argument("--kind", required=True, choices=("stick-slip", "stability", "friction"))
+    p.add_argument("--sel", action="append", metavar="AXIS=VALUE")
+    p.add_argument("-o", "--output", required=True, help="PNG file to write")
+    p.set_defaults(func=cmd_map)
+
+    p = sub.add_parser("plan", parents=[common],
+                       help="what a spec will run, and its cost per accuracy level")
+    p.add_argument("spec")
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
+    p.set_defaults(func=cmd_plan)
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    if getattr(args, "workers", 1) is not None and getattr(args, "workers", 1) < 1:
+        print("ditherlab: --workers must be >= 1", file=sys.stderr)
+        return EXIT_REFUSED
+    try:
+        return args.func(args)
+    except SpecError as exc:
+        print(f"ditherlab: {exc}", file=sys.stderr)
+        return EXIT_REFUSED
+    except UserError as exc:
+        print(f"ditherlab: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,225 @@
+"""Running a plan: blocks of points as dask tasks, a journal of finished blocks, and a
+cube rebuilt from the journal and published atomically (DESIGN.md §4).
+
+The submitting process is the only writer. Workers compute and return arrays; they
+never touch files. Each finished block is journaled at once (temporary name, fsync,
+rename), so a submitter killed at any instant loses at most the blocks in flight; the
+cube is republished every few blocks and at the end. A resubmitted spec computes only
+the blocks missing from the journal.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import time
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+import store
+from engine import params as P
+from engine import status as S
+
+from .outputs import output_attrs
+from .plan import Plan
+from .version import __version__
+
+PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running
+COUNTERS = ("status", "cost_s", "steps", "evals")
+
+log = logging.getLogger("ditherlab")
+
+
+@dataclass
+class SubmitResult:
+    sweep_id: str
+    cube_path: Path
+    state: str
+    n_points: int
+    n_ok: int
+    n_failed: int
+    blocks_run: int
+    blocks_total: int
+    wall_s: float
+
+
+# --- the task (runs on a worker) ------------------------------------------------------
+
+def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
+    """Integrate one block; never raises (a crash of the engine marks the block FAILED)."""
+    from engine.batch import run_block
+
+    try:
+        res = run_block(scene, points, p, settings)
+    except Exception as exc:  # noqa: BLE001 -- one bad block must not end the sweep
+        n = len(points)
+        nan = np.full(n, np.nan)
+        return {**{name: nan for name in scene.outputs},
+                "status": np.full(n, S.FAILED, np.int8), "cost_s": np.zeros(n),
+                "steps": np.zeros(n, np.int64), "evals": np.zeros(n, np.int64),
+                "error": f"{type(exc).__name__}: {exc}"}
+    return {**res.outputs, "status": res.status, "cost_s": res.cost_s,
+            "steps": res.steps, "evals": res.evals}
+
+
+def warm_up(scene, p: np.ndarray, settings) -> float:
+    """Compile the block kernel in this process (once per worker); returns seconds."""
+    t0 = time.perf_counter()
+    q = p.copy()
+    q[P.T_END] = min(q[P.T_END], 1e-3)
+    q[P.T_TRANSIENT] = 0.0
+    compute_block(scene, np.array([[0.1, 1000.0, 0.1, 0.1]]), q, settings)
+    return time.perf_counter() - t0
+
+
+# --- clusters --------------------------------------------------------------------------
+
+@contextmanager
+def dask_client(scheduler: str | None = None, workers: int = 2):
+    """A client on an existing cluster (``scheduler`` address) or on a LocalCluster of
+    ``workers`` single-threaded processes."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        client = Client(scheduler, timeout="20s")
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                      dashboard_address=None, silence_logs=logging.ERROR) as cluster, \
+            Client(cluster) as client:
+        yield client
+
+
+# --- the cube --------------------------------------------------------------------------
+
+def cube_attrs(plan: Plan) -> dict:
+    return {
+        "name": plan.spec.name,
+        "sweep_id": plan.sweep_id,
+        "spec": plan.spec.to_json(),
+        "spec_hash": plan.sweep_id,
+        "ditherlab_version": __version__,
+        "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+        "path": plan.path,
+        "system": plan.spec.system, "friction": plan.spec.friction,
+        "dither": plan.spec.dither,
+        "engine_settings": plan.numerics.as_dict() if plan.path == "simulate" else {},
+        "engine_scene": {k: (list(v) if isinstance(v, tuple) else v)
+                         for k, v in vars(plan.scene).items()},
+        "engine_params": P.unpack(plan.params),
+        "Conventions": "CF-1.8",
+    }
+
+
+def empty_cube(plan: Plan):
+    variables = {name: output_attrs(plan.path, name) for name in plan.outputs}
+    units = {"omega": "rad/s", "W": "m/s", "v_ref": "m/s", "v_d": "m/s"} \
+        if plan.spec.system == "contact" else None
+    return store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units)
+
+
+def _flat_payload(plan: Plan, block: int, result: dict) -> dict:
+    return {"index": plan.blocks[block], **{k: v for k, v in result.items() if k != "error"}}
+
+
+# --- submit ----------------------------------------------------------------------------
+
+def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
+           workers: int = 2, progress: bool = True, max_blocks: int | None = None
+           ) -> SubmitResult:
+    """Run every block of ``plan`` missing from its journal; publish the cube.
+
+    ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
+    """
+    t0 = time.perf_counter()
+    sweep = store.SweepDir(store_root, plan.sweep_id)
+    catalogue = store.Catalogue(store_root)
+    journal = store.Journal(sweep.journal)
+    missing = [b for b in range(len(plan.blocks)) if b not in journal.done()]
+    if not missing and sweep.cube.exists():
+        return _finish(plan, sweep, catalogue, journal, blocks_run=0, t0=t0, publish=False)
+    sweep.root.mkdir(parents=True, exist_ok=True)
+    sweep.write_spec(plan.spec.to_json())
+    catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
+                       len(plan.blocks), str(sweep.root))
+    catalogue.update(plan.sweep_id, state="running")
+    if max_blocks is not None:
+        missing = missing[:max_blocks]
+    run = _run_blocks_local if plan.path != "simulate" and scheduler is None else _run_blocks
+    n_run = run(plan, missing, journal, sweep, scheduler=scheduler, workers=workers,
+                progress=progress)
+    return _finish(plan, sweep, catalogue, journal, blocks_run=n_run, t0=t0, publish=True)
+
+
+def _run_blocks(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
+                progress) -> int:
+    from distributed import as_completed
+
+    bar = _progress_bar(plan, len(missing), progress)
+    with dask_client(scheduler, workers) as client:
+        client.run(warm_up, plan.scene, plan.params, plan.numerics.settings)
+        futures = {client.submit(compute_block, plan.scene, plan.block_points(b), plan.params,
+                                 plan.numerics.settings, pure=False, key=f"block-{b}-{plan.sweep_id}"): b
+                   for b in missing}
+        last = time.monotonic()
+        for future in as_completed(futures):
+            b = futures[future]
+            _journal_block(plan, b, future.result(), journal)
+            bar.update(1)
+            if time.monotonic() - last > PUBLISH_EVERY_S:
+                _publish(plan, sweep, journal)
+                last = time.monotonic()
+    bar.close()
+    return len(missing)
+
+
+def _run_blocks_local(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
+                      progress) -> int:
+    """The analysis paths cost microseconds per point: starting a cluster would cost
+    more than the whole sweep, so they run in this process."""
+    bar = _progress_bar(plan, len(missing), progress)
+    for b in missing:
+        _journal_block(plan, b, compute_block(plan.scene, plan.block_points(b), plan.params,
+                                              plan.numerics.settings), journal)
+        bar.update(1)
+    bar.close()
+    return len(missing)
+
+
+def _journal_block(plan: Plan, b: int, result: dict, journal) -> None:
+    if "error" in result:
+        log.warning("block %d failed: %s", b, result["error"])
+    journal.write(b, _flat_payload(plan, b, result))
+
+
+def _progress_bar(plan: Plan, n: int, enabled: bool):
+    from tqdm import tqdm
+
+    return tqdm(total=n, unit="block", desc=f"{plan.spec.name} [{plan.sweep_id}]",
+                disable=not enabled, mininterval=0.5)
+
+
+def _publish(plan: Plan, sweep, journal):
+    ds = store.rebuild(empty_cube(plan), journal)
+    store.publish(ds, sweep.cube)
+    return ds
+
+
+def _finish(plan, sweep, catalogue, journal, *, blocks_run, t0, publish) -> SubmitResult:
+    ds = _publish(plan, sweep, journal) if publish else store.open_cube(sweep.cube)
+    status = ds["status"].values
+    n_ok = int((status == S.OK).sum())
+    n_missing = int((status == S.NOT_COMPUTED).sum())
+    n_failed = int(status.size - n_ok - n_missing)
+    state = "partial" if n_missing else "done"
+    catalogue.update(plan.sweep_id, state=state, done_points=n_ok + n_failed,
+                     failed_points=n_failed)
+    done = journal.done()
+    return SubmitResult(plan.sweep_id, sweep.cube, state, status.size, n_ok, n_failed,
+                        blocks_run, len(plan.blocks) if not done else len(plan.blocks),
+                        time.perf_counter() - t0)

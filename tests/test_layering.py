@@ -1,0 +1,33 @@
+"""The three rooms keep their one-way doors (STYLE.md 'The house', docs/ARCHITECTURE.md):
+engine imports no dask/xarray/matplotlib/store/sweeps; store imports no numba/engine/
+sweeps/dask. Each package is imported in a fresh interpreter with the others blocked."""
+import subprocess
+import sys
+
+import pytest
+
+BLOCKER = """
+import sys
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in {blocked!r}:
+            raise ImportError(f'{{name}} is off limits for {package}')
+sys.meta_path.insert(0, Block())
+import {package}
+import pkgutil, importlib
+for mod in pkgutil.walk_packages({package}.__path__, '{package}.'):
+    importlib.import_module(mod.name)
+"""
+
+RULES = {
+    "engine": ["dask", "distributed", "xarray", "h5py", "h5netcdf", "matplotlib", "store",
+               "sweeps"],
+    "store": ["numba", "engine", "sweeps", "dask", "distributed"],
+}
+
+
+@pytest.mark.parametrize("package", sorted(RULES))
+def test_package_imports_with_others_blocked(package):
+    code = BLOCKER.format(blocked=RULES[package], package=package)
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
