@@ -1,0 +1,212 @@
+"""The catalogue of sweeps in a store: ``<store>/catalogue.sqlite`` (DESIGN.md §6).
+
+One row per sweep: id, name, state, counts, paths and times. SQLite in WAL mode
+with a busy timeout, one short connection per call, so several processes (a
+running sweep, ``ditherlab status`` in another shell, a future ``serve``) can share
+it on a local disk (WAL does not work over network file systems).
+
+The cubes are the truth and the catalogue an index: a cube folder without a row
+(a crash between publish and register, a copied store, a deleted catalogue) gets
+its row back from the cube's attributes on the next ``list``/``find``/``get``.
+
+Counts: ``done_points`` have a final status (ok, failed or non-finite),
+``failed_points`` are those of them that failed or went non-finite.
+
+States: ``queued`` (registered, nothing run), ``running``, ``partial`` (stopped
+with points still to compute), ``done`` (every point has a final status, maybe
+failed ones), ``failed`` (the run itself aborted).
+"""
+from __future__ import annotations
+
+import sqlite3
+import warnings
+from contextlib import closing
+from datetime import datetime, timezone
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from . import attrs as A
+from .cube import FAILED, NON_FINITE, NOT_COMPUTED
+from .layout import CATALOGUE_NAME, CUBE_NAME
+
+STATES = ("queued", "running", "partial", "done", "failed")
+UPDATABLE = ("state", "done_points", "failed_points", "done_blocks", "n_blocks", "message", "path")
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS sweeps (
+    sweep_id      TEXT PRIMARY KEY,
+    name          TEXT NOT NULL,
+    state         TEXT NOT NULL,
+    spec_json     TEXT NOT NULL,
+    n_points      INTEGER NOT NULL,
+    n_blocks      INTEGER NOT NULL,
+    done_points   INTEGER NOT NULL DEFAULT 0,
+    failed_points INTEGER NOT NULL DEFAULT 0,
+    done_blocks   INTEGER NOT NULL DEFAULT 0,
+    path          TEXT NOT NULL,
+    message       TEXT NOT NULL DEFAULT '',
+    created       TEXT NOT NULL,
+    updated       TEXT NOT NULL
+)"""
+_UPSERT = """
+INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_points,
+                    failed_points, done_blocks, path, created, updated)
+VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points,
+        :failed_points, :done_blocks, :path, :created, :updated)
+ON CONFLICT(sweep_id) DO UPDATE SET name = excluded.name, spec_json = excluded.spec_json,
+    n_points = excluded.n_points, n_blocks = excluded.n_blocks, path = excluded.path,
+    updated = excluded.updated"""
+_ADOPT = _UPSERT.split(" ON CONFLICT")[0] + " ON CONFLICT(sweep_id) DO NOTHING"
+
+
+def _now() -> str:
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+
+
+class Catalogue:
+    """The SQLite catalogue of the store at ``store_root`` (created if missing).
+
+    Parameters
+    ----------
+    store_root
+        The store folder; the database is ``<store_root>/catalogue.sqlite``.
+    timeout_s
+        How long a call waits for another process's write lock before failing.
+    """
+
+    def __init__(self, store_root, timeout_s: float = 30.0):
+        self.root = Path(store_root)
+        self.path = self.root / CATALOGUE_NAME
+        self.timeout_s = float(timeout_s)
+        self.root.mkdir(parents=True, exist_ok=True)
+        with closing(self._connect()) as con:
+            con.execute("PRAGMA journal_mode=WAL")
+            con.execute(_SCHEMA)
+
+    def __repr__(self) -> str:
+        return f"Catalogue({str(self.root)!r})"
+
+    def _connect(self) -> sqlite3.Connection:
+        con = sqlite3.connect(self.path, timeout=self.timeout_s, isolation_level=None)
+        con.row_factory = sqlite3.Row
+        con.execute(f"PRAGMA busy_timeout={int(self.timeout_s * 1000)}")
+        return con
+
+    def _query(self, sql: str, args=()) -> list[dict]:
+        with closing(self._connect()) as con:
+            return [dict(row) for row in con.execute(sql, args)]
+
+    def register(self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path) -> dict:
+        """Add a sweep in state ``queued``, or refresh a known one (resubmission).
+
+        A known sweep keeps its state, counts and creation time; its name, spec,
+        sizes and path are overwritten. Returns the row.
+        """
+        now = _now()
+        row = dict(sweep_id=str(sweep_id), name=str(name), state="queued", spec_json=str(spec_json),
+                   n_points=_count("n_points", n_points), n_blocks=_count("n_blocks", n_blocks),
+                   done_points=0, failed_points=0, done_blocks=0, path=str(path), created=now, updated=now)
+        with closing(self._connect()) as con:
+            con.execute(_UPSERT, row)
+        return self.get(sweep_id)
+
+    def update(self, sweep_id: str, **fields) -> dict:
+        """Set some of ``UPDATABLE`` (``state=``, ``done_points=`` ...) and the update time.
+
+        Returns the row. Raises ``ValueError`` for an unknown field or state and
+        ``LookupError`` for an unknown sweep.
+        """
+        unknown = sorted(set(fields) - set(UPDATABLE))
+        if unknown:
+            raise ValueError(f"Catalogue.update: unknown field(s) {unknown}; updatable: {UPDATABLE}")
+        if "state" in fields and fields["state"] not in STATES:
+            raise ValueError(f"Catalogue.update: state must be one of {STATES}, got {fields['state']!r}")
+        for key in ("done_points", "failed_points", "done_blocks", "n_blocks"):
+            if key in fields:
+                fields[key] = _count(key, fields[key])
+        fields["updated"] = _now()
+        assignments = ", ".join(f"{k} = :{k}" for k in fields)
+        with closing(self._connect()) as con:
+            cur = con.execute(f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id", {**fields, "_id": sweep_id})
+        if cur.rowcount == 0:
+            raise LookupError(f"Catalogue.update: no sweep with id {sweep_id!r}; register it first")
+        return self.get(sweep_id)
+
+    def get(self, sweep_id: str) -> dict:
+        """The row of ``sweep_id`` (exact id), as a dict; ``LookupError`` if unknown."""
+        for attempt in range(2):
+            rows = self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (sweep_id,))
+            if rows:
+                return rows[0]
+            if attempt == 0 and not self.scan():
+                break
+        raise LookupError(f"no sweep with id {sweep_id!r} in {self.path}")
+
+    def find(self, key: str) -> dict:
+        """Resolve what a user typed: an exact id, a name (the newest sweep of that
+        name), or a unique id prefix. ``LookupError`` says what matched or what exists."""
+        for attempt in range(2):
+            row = self._match(str(key))
+            if row is not None:
+                return row
+            if attempt == 0 and not self.scan():
+                break
+        known = ", ".join(f"{r['name']} ({r['sweep_id'][:10]})" for r in self.list()[-10:]) or "none"
+        raise LookupError(f"no sweep matches {key!r} (id, id prefix or name); known sweeps: {known}")
+
+    def _match(self, key: str) -> dict | None:
+        rows = self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
+        rows = rows or self._query("SELECT * FROM sweeps WHERE name = ? ORDER BY created DESC", (key,))
+        if rows:
+            return rows[0]
+        rows = self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?", (len(key), key))
+        if len(rows) > 1:
+            ids = ", ".join(r["sweep_id"] for r in rows)
+            raise LookupError(f"id prefix {key!r} is ambiguous: it matches {ids}; type more characters")
+        return rows[0] if rows else None
+
+    def list(self) -> list[dict]:
+        """Every sweep, oldest first (after adopting cubes that have no row)."""
+        self.scan()
+        return self._query("SELECT * FROM sweeps ORDER BY created, sweep_id")
+
+    def scan(self) -> list[str]:
+        """Add a row for every ``<store>/<id>/cube.h5`` that has none; returns the new ids."""
+        known = {r["sweep_id"] for r in self._query("SELECT sweep_id FROM sweeps")}
+        added = []
+        for cube in sorted(self.root.glob(f"*/{CUBE_NAME}")):
+            if cube.parent.name in known:
+                continue
+            row = _row_from_cube(cube)
+            if row is not None:
+                with closing(self._connect()) as con:
+                    con.execute(_ADOPT, row)
+                added.append(row["sweep_id"])
+        return added
+
+
+def _count(name: str, value) -> int:
+    if int(value) != value or value < 0:
+        raise ValueError(f"Catalogue: {name} must be a non-negative integer, got {value!r}")
+    return int(value)
+
+
+def _row_from_cube(cube: Path) -> dict | None:
+    """A catalogue row rebuilt from a cube's attributes and status counts."""
+    try:
+        with xr.open_dataset(cube, engine="h5netcdf", decode_timedelta=False) as ds:
+            attrs = dict(ds.attrs)
+            status = ds["status"].values
+    except Exception as err:  # a broken file must not break `ditherlab status`
+        warnings.warn(f"catalogue: cannot read {cube} ({err}); skipped")
+        return None
+    failed = int(np.count_nonzero((status == FAILED) | (status == NON_FINITE)))
+    pending = int(np.count_nonzero(status == NOT_COMPUTED))
+    created = attrs.get(A.CREATED) or datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat()
+    spec = attrs.get(A.SPEC, "{}")
+    return dict(sweep_id=cube.parent.name, name=str(attrs.get(A.NAME, cube.parent.name)),
+                state="partial" if pending else "done",
+                spec_json=spec if isinstance(spec, str) else A.canonical_json(spec),
+                n_points=int(status.size), n_blocks=0, done_points=int(status.size) - pending, failed_points=failed,
+                done_blocks=0, path=str(cube), created=str(created), updated=_now())
