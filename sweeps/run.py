@@ -148,6 +148,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
                        len(plan.blocks), str(sweep.root))
     catalogue.update(plan.sweep_id, state="running")
+    _publish(plan, sweep, journal)  # a valid cube exists from the first instant
     if max_blocks is not None:
         missing = missing[:max_blocks]
     run = _run_blocks_local if plan.path != "simulate" and scheduler is None else _run_blocks

@@ -1,0 +1,55 @@
+"""Helpers for end-to-end tests through the real command line."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BIN = Path(sys.executable).parent / "ditherlab"
+
+SIMULATE_SPEC = """
+name = "e2e-sim"
+friction = "lugre"
+dither = "square-velocity"
+method = "simulate"
+outputs = ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"]
+accuracy = "draft"
+block_size = 2
+[time]
+t_end = 12.0
+t_transient = 4.0
+[grid]
+W = [0.0, 0.2, 0.4, 0.6]
+omega = [300.0, 1000.0]
+v_ref = [0.4]
+v_d = [0.1]
+"""
+
+AVERAGED_SPEC = """
+name = "e2e-avg"
+friction = "lugre"
+dither = "square-velocity"
+method = "averaged"
+[grid]
+W = { start = 0.0, stop = 1.0, num = 21 }
+v_ref = { start = 0.02, stop = 1.0, num = 25 }
+v_d = [0.1]
+"""
+
+
+def ditherlab(*args, store=None, check=False, timeout=600) -> subprocess.CompletedProcess:
+    cmd = [str(BIN), *args] + (["--store", str(store)] if store is not None else [])
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                          env={**__import__("os").environ, "MPLBACKEND": "Agg"})
+    if check and proc.returncode != 0:
+        raise AssertionError(f"{cmd} -> {proc.returncode}\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+@pytest.fixture
+def spec_file(tmp_path):
+    def write(text: str, name: str = "spec.toml") -> Path:
+        path = tmp_path / name
+        path.write_text(text)
+        return path
+    return write
