@@ -13,7 +13,7 @@ import logging
 import os
 import time
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +43,7 @@ class SubmitResult:
     blocks_run: int
     blocks_total: int
     wall_s: float
+    timings: dict = field(default_factory=dict)  # phase -> seconds (cluster, warm_up, compute)
 
 
 # --- the task (runs on a worker) ------------------------------------------------------
@@ -152,18 +153,26 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     if max_blocks is not None:
         missing = missing[:max_blocks]
     run = _run_blocks_local if plan.path != "simulate" and scheduler is None else _run_blocks
+    timings: dict = {}
     n_run = run(plan, missing, journal, sweep, scheduler=scheduler, workers=workers,
-                progress=progress)
-    return _finish(plan, sweep, catalogue, journal, blocks_run=n_run, t0=t0, publish=True)
+                progress=progress, timings=timings)
+    res = _finish(plan, sweep, catalogue, journal, blocks_run=n_run, t0=t0, publish=True)
+    res.timings = timings
+    return res
 
 
 def _run_blocks(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
-                progress) -> int:
+                progress, timings) -> int:
     from distributed import as_completed
 
     bar = _progress_bar(plan, len(missing), progress)
+    t = time.perf_counter()
     with dask_client(scheduler, workers) as client:
+        timings["cluster_s"] = time.perf_counter() - t
+        t = time.perf_counter()
         client.run(warm_up, plan.scene, plan.params, plan.numerics.settings)
+        timings["warm_up_s"] = time.perf_counter() - t
+        t = time.perf_counter()
         futures = {client.submit(compute_block, plan.scene, plan.block_points(b), plan.params,
                                  plan.numerics.settings, pure=False, key=f"block-{b}-{plan.sweep_id}"): b
                    for b in missing}
@@ -175,19 +184,22 @@ def _run_blocks(plan: Plan, missing: list[int], journal, sweep, *, scheduler, wo
             if time.monotonic() - last > PUBLISH_EVERY_S:
                 _publish(plan, sweep, journal)
                 last = time.monotonic()
+        timings["compute_s"] = time.perf_counter() - t
     bar.close()
     return len(missing)
 
 
 def _run_blocks_local(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
-                      progress) -> int:
+                      progress, timings) -> int:
     """The analysis paths cost microseconds per point: starting a cluster would cost
     more than the whole sweep, so they run in this process."""
     bar = _progress_bar(plan, len(missing), progress)
+    t = time.perf_counter()
     for b in missing:
         _journal_block(plan, b, compute_block(plan.scene, plan.block_points(b), plan.params,
                                               plan.numerics.settings), journal)
         bar.update(1)
+    timings["compute_s"] = time.perf_counter() - t
     bar.close()
     return len(missing)
 

@@ -1,0 +1,78 @@
+#!/usr/bin/env python
+"""Benchmark of the sweep service's scheduling (issue 'sweep service', Speed).
+
+Prints, for one 1000-point simulated sweep (LuGre slider, square-velocity dither):
+
+- T_serial: the same blocks run one after another in this process, without dask;
+- T_dask2: the compute phase of the sweep on LocalCluster(2 workers x 1 thread)
+  (cluster start-up and the one-off per-worker numba compilation are printed apart);
+- dask overhead = T_dask2 / (T_serial / 2) - 1            (target <= 5 %);
+- T_dask1: the same on one worker, and the 2-core speed-up T_dask1 / T_dask2 (target >= 1.9).
+
+All three runs happen in this one process run, so the ratios compare like with like on a
+shared, noisy machine. Usage: ``python scripts/bench_sweep.py [--t-end 20]``.
+"""
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+
+from sweeps.plan import make_plan
+from sweeps.run import compute_block, submit, warm_up
+from sweeps.spec import parse_spec
+
+
+def bench_spec(n_w: int, n_omega: int, n_vref: int, t_end: float) -> dict:
+    return {
+        "name": "bench-sweep", "friction": "lugre", "dither": "square-velocity",
+        "method": "simulate", "accuracy": "draft",
+        "outputs": ["v_mean", "v_slow_p2p", "F_mean"],
+        "time": {"t_end": t_end, "t_transient": t_end / 2},
+        "grid": {"W": {"start": 0.0, "stop": 0.6, "num": n_w},
+                 "omega": {"start": 100.0, "stop": 1000.0, "num": n_omega, "scale": "log"},
+                 "v_ref": {"start": 0.1, "stop": 0.5, "num": n_vref}, "v_d": [0.1]},
+    }
+
+
+def serial(plan) -> float:
+    warm_up(plan.scene, plan.params, plan.numerics.settings)
+    t0 = time.perf_counter()
+    for b in range(len(plan.blocks)):
+        compute_block(plan.scene, plan.block_points(b), plan.params, plan.numerics.settings)
+    return time.perf_counter() - t0
+
+
+def on_dask(plan, workers: int) -> dict:
+    with tempfile.TemporaryDirectory() as store:
+        res = submit(plan, store, workers=workers, progress=False)
+    assert res.state == "done", res
+    return res.timings
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--t-end", type=float, default=20.0)
+    args = ap.parse_args()
+    spec = parse_spec(bench_spec(10, 10, 10, args.t_end))
+    plan = make_plan(spec)
+    print(f"sweep: {plan.n_points} points in {len(plan.blocks)} blocks, "
+          f"{plan.numerics.integrator} ({plan.numerics.label}), t_end = {args.t_end}")
+    t_serial = serial(plan)
+    d2 = on_dask(plan, 2)
+    d1 = on_dask(plan, 1)
+    overhead = d2["compute_s"] / (t_serial / 2) - 1
+    speedup = d1["compute_s"] / d2["compute_s"]
+    print(f"T_serial (no dask, 1 core)      {t_serial:8.2f} s   "
+          f"({t_serial / plan.n_points * 1e3:.2f} ms per point)")
+    print(f"T_dask2 compute (2 workers)     {d2['compute_s']:8.2f} s   "
+          f"[cluster start {d2['cluster_s']:.2f} s, per-worker compile {d2['warm_up_s']:.2f} s]")
+    print(f"T_dask1 compute (1 worker)      {d1['compute_s']:8.2f} s")
+    print(f"dask overhead  T_dask2 / (T_serial/2) - 1 = {overhead * 100:+.1f} %   (target <= 5 %)")
+    print(f"2-core speed-up T_dask1 / T_dask2          = {speedup:.2f}x    (target >= 1.9x)")
+    print(f"whole sweep incl. start-up (2 workers)     = "
+          f"{sum(d2.values()):.2f} s")
+
+
+if __name__ == "__main__":
+    main()
