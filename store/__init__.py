@@ -1,0 +1,94 @@
+"""ditherlab's store: result cubes, the crash-safe journal, the catalogue, queries, maps.
+
+Knows numpy, xarray, h5netcdf/h5py, sqlite3 and matplotlib (maps only); never
+imports numba, dask, ``engine`` or ``sweeps`` (ARCHITECTURE.md).
+
+How the sweep runner uses it (the submitting process is the only writer)::
+
+    import store
+
+    paths = store.SweepPaths(store_root, sweep_id)      # <store>/<id>/{cube.h5, journal/}
+    cat = store.Catalogue(store_root)
+    cat.register(sweep_id, name, spec_json, n_points, n_blocks, paths.cube)
+
+    empty = store.empty_cube(coords, variables, attrs)  # outputs NaN, status 1
+    journal = store.Journal(paths.journal)
+    todo = [b for b in blocks if b.id not in journal.done()]      # resume
+    for block, result in finished(todo):                # as dask futures complete
+        journal.write(block.id, store.block_payload(
+            block.flat_index, result.outputs, result.status, result.cost_s,
+            result.steps, result.evals))
+        if every_few_blocks_or_last:
+            cube = store.rebuild(empty, journal)
+            store.publish(cube, paths.cube)             # atomic replace
+            counts = store.status_counts(cube)
+            cat.update(sweep_id, state="running", done_points=..., failed_points=...)
+
+and how a user reads it::
+
+    ds = store.open_cube(paths.cube)                    # in memory, file closed
+    store.zone_map(ds)                                  # Fig. 14 zones over (W, omega)
+    store.stability_chart(ds, sel={"v_d": 0.1})         # Fig. 9 labels over (v_ref, W)
+    store.stability_map(ds, "fig09.png", sel={"v_d": 0.1})
+
+Public API
+----------
+cube
+    ``AXES``; ``empty_cube(coords, variables, attrs=None, axis_units=None,
+    axis_long_names=None) -> Dataset``; ``fill(ds, flat_index, values, status, cost_s,
+    steps, evals)``; ``publish(ds, path) -> Path``; ``open_cube(path) -> Dataset``;
+    ``grid_points(ds, flat_index=None) -> (n, 4)``; ``pending_index(ds)``;
+    ``status_counts(ds)``; ``output_names(ds)``; status codes ``OK, NOT_COMPUTED,
+    FAILED, NON_FINITE``.
+journal
+    ``Journal(folder)`` with ``.write(block_id, payload)``, ``.done() -> set[int]``,
+    ``.read() -> Iterator[(block_id, payload)]``; ``block_payload(...)``;
+    ``fill_block(ds, payload)``; ``rebuild(ds_empty, journal) -> Dataset``.
+catalogue
+    ``Catalogue(store_root)`` with ``register``, ``update``, ``get``, ``find``,
+    ``list``, ``scan``; ``STATES``.
+query
+    ``zone_map``, ``stability_chart``, ``effective_friction_curve``, ``table``,
+    ``select``; labels ``STABLE, PU, SU, NO_DATA``.
+maps
+    ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
+layout / attrs
+    ``SweepPaths(root, sweep_id)``, ``default_store()``, ``atomic_write``;
+    ``canonical_json``, ``decode_attr``.
+"""
+from .attrs import canonical_json
+from .attrs import decode as decode_attr
+from .catalogue import STATES, Catalogue
+from .cube import (
+    AXES,
+    FAILED,
+    NON_FINITE,
+    NOT_COMPUTED,
+    OK,
+    STATUS_MEANINGS,
+    empty_cube,
+    fill,
+    grid_points,
+    open_cube,
+    output_names,
+    pending_index,
+    publish,
+    status_counts,
+)
+from .journal import Journal, block_payload, fill_block, rebuild
+from .layout import SweepPaths, atomic_write, default_store
+from .maps import friction_curves, stability_map, stick_slip_map
+from .query import NO_DATA, PU, STABLE, SU, effective_friction_curve, select, stability_chart, table, zone_map
+
+__all__ = [
+    "AXES", "FAILED", "NON_FINITE", "NOT_COMPUTED", "OK", "STATUS_MEANINGS",
+    "empty_cube", "fill", "grid_points", "open_cube", "output_names", "pending_index", "publish",
+    "status_counts",
+    "Journal", "block_payload", "fill_block", "rebuild",
+    "STATES", "Catalogue",
+    "NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select", "stability_chart", "table",
+    "zone_map",
+    "friction_curves", "stability_map", "stick_slip_map",
+    "SweepPaths", "atomic_write", "default_store",
+    "canonical_json", "decode_attr",
+]

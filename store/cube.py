@@ -54,8 +54,8 @@ def _check_axis(name: str, values) -> np.ndarray:
         raise ValueError(f"coords[{name!r}] must be a non-empty 1-D list of numbers, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"coords[{name!r}] must be finite, got {arr.tolist()}")
-    if arr.size > 1 and not np.all(np.diff(arr) > 0):
-        raise ValueError(f"coords[{name!r}] must be strictly increasing (sort it, drop duplicates), got {arr.tolist()}")
+    if np.unique(arr).size != arr.size:
+        raise ValueError(f"coords[{name!r}] has repeated values (drop the duplicates), got {arr.tolist()}")
     return arr
 
 
@@ -111,8 +111,9 @@ def empty_cube(
     Parameters
     ----------
     coords
-        Axis name -> strictly increasing 1-D values, for each of ``AXES`` (a
-        length-1 list for an axis that is not swept).
+        Axis name -> 1-D values without repeats, for each of ``AXES`` (a length-1
+        list for an axis that is not swept). Any order is kept as given; queries
+        and maps sort where they need to.
     variables
         Output name -> ``(long_name, units)``, e.g. ``engine.outputs.SIMULATE``.
     attrs

@@ -5,6 +5,7 @@ A store is one folder::
     <store>/catalogue.sqlite          the catalogue of sweeps (store.catalogue)
     <store>/<sweep-id>/cube.h5        the result cube (store.cube)
     <store>/<sweep-id>/journal/       one small file per finished block (store.journal)
+    <store>/<sweep-id>/spec.json      the spec as submitted (written by the runner)
 
 The store root defaults to ``$DITHERLAB_STORE`` or ``./ditherlab-store`` (DESIGN.md §5).
 
@@ -26,6 +27,7 @@ from typing import Callable
 CATALOGUE_NAME = "catalogue.sqlite"
 CUBE_NAME = "cube.h5"
 JOURNAL_DIR = "journal"
+SPEC_NAME = "spec.json"
 ENV_STORE = "DITHERLAB_STORE"
 DEFAULT_STORE = "ditherlab-store"
 TEMP_MARK = ".tmp-"
@@ -67,6 +69,11 @@ class SweepPaths:
     def cube(self) -> Path:
         """``<store>/<sweep-id>/cube.h5``."""
         return self.folder / CUBE_NAME
+
+    @property
+    def spec(self) -> Path:
+        """``<store>/<sweep-id>/spec.json``."""
+        return self.folder / SPEC_NAME
 
     @property
     def journal(self) -> Path:
