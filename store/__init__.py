@@ -7,12 +7,13 @@ How the sweep runner uses it (the submitting process is the only writer)::
 
     import store
 
-    paths = store.SweepPaths(store_root, sweep_id)      # <store>/<id>/{cube.h5, journal/}
+    sweep = store.SweepDir(store_root, sweep_id)        # <store>/<id>/{cube.h5, journal/, spec.json}
+    sweep.write_spec(spec_json)
     cat = store.Catalogue(store_root)
-    cat.register(sweep_id, name, spec_json, n_points, n_blocks, paths.cube)
+    cat.register(sweep_id, name, spec_json, n_points, n_blocks, sweep.root)
 
     empty = store.empty_cube(coords, variables, attrs)  # outputs NaN, status 1
-    journal = store.Journal(paths.journal)
+    journal = store.Journal(sweep.journal)
     todo = [b for b in blocks if b.id not in journal.done()]      # resume
     for block, result in finished(todo):                # as dask futures complete
         journal.write(block.id, store.block_payload(
@@ -20,13 +21,13 @@ How the sweep runner uses it (the submitting process is the only writer)::
             result.steps, result.evals))
         if every_few_blocks_or_last:
             cube = store.rebuild(empty, journal)
-            store.publish(cube, paths.cube)             # atomic replace
+            store.publish(cube, sweep.cube)             # atomic replace
             counts = store.status_counts(cube)
             cat.update(sweep_id, state="running", done_points=..., failed_points=...)
 
 and how a user reads it::
 
-    ds = store.open_cube(paths.cube)                    # in memory, file closed
+    ds = store.open_cube(sweep.cube)                    # in memory, file closed
     store.zone_map(ds)                                  # Fig. 14 zones over (W, omega)
     store.stability_chart(ds, sel={"v_d": 0.1})         # Fig. 9 labels over (v_ref, W)
     store.stability_map(ds, "fig09.png", sel={"v_d": 0.1})
@@ -53,7 +54,7 @@ query
 maps
     ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
 layout / attrs
-    ``SweepPaths(root, sweep_id)``, ``default_store()``, ``atomic_write``;
+    ``SweepDir(store_root, sweep_id)``, ``default_store()``, ``atomic_write``;
     ``canonical_json``, ``decode_attr``.
 """
 from .attrs import canonical_json
@@ -76,7 +77,7 @@ from .cube import (
     status_counts,
 )
 from .journal import Journal, block_payload, fill_block, rebuild
-from .layout import SweepPaths, atomic_write, default_store
+from .layout import SweepDir, atomic_write, default_store
 from .maps import friction_curves, stability_map, stick_slip_map
 from .query import NO_DATA, PU, STABLE, SU, effective_friction_curve, select, stability_chart, table, zone_map
 
@@ -89,6 +90,6 @@ __all__ = [
     "NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select", "stability_chart", "table",
     "zone_map",
     "friction_curves", "stability_map", "stick_slip_map",
-    "SweepPaths", "atomic_write", "default_store",
+    "SweepDir", "atomic_write", "default_store",
     "canonical_json", "decode_attr",
 ]

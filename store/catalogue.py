@@ -143,17 +143,17 @@ class Catalogue:
                 break
         raise LookupError(f"no sweep with id {sweep_id!r} in {self.path}")
 
-    def find(self, key: str) -> dict:
+    def find(self, key: str) -> dict | None:
         """Resolve what a user typed: an exact id, a name (the newest sweep of that
-        name), or a unique id prefix. ``LookupError`` says what matched or what exists."""
+        name), or a unique id prefix; ``None`` when nothing matches.
+
+        Raises ``LookupError`` for an id prefix that matches several sweeps.
+        """
         for attempt in range(2):
             row = self._match(str(key))
-            if row is not None:
+            if row is not None or (attempt == 0 and not self.scan()):
                 return row
-            if attempt == 0 and not self.scan():
-                break
-        known = ", ".join(f"{r['name']} ({r['sweep_id'][:10]})" for r in self.list()[-10:]) or "none"
-        raise LookupError(f"no sweep matches {key!r} (id, id prefix or name); known sweeps: {known}")
+        return None
 
     def _match(self, key: str) -> dict | None:
         rows = self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))

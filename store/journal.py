@@ -63,7 +63,7 @@ def _checked(payload: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 
 class Journal:
-    """The journal folder of one sweep: ``Journal(SweepPaths(root, id).journal)``.
+    """The journal folder of one sweep: ``Journal(SweepDir(store_root, id).journal)``.
 
     Parameters
     ----------

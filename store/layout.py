@@ -20,7 +20,6 @@ from __future__ import annotations
 import os
 import secrets
 from contextlib import suppress
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -38,47 +37,47 @@ def default_store() -> Path:
     return Path(os.environ.get(ENV_STORE) or DEFAULT_STORE)
 
 
-@dataclass(frozen=True)
-class SweepPaths:
-    """The paths of one sweep inside a store.
+class SweepDir:
+    """The folder of one sweep inside a store, and the paths within it.
 
     Parameters
     ----------
-    root
+    store_root
         The store folder.
     sweep_id
-        The sweep id (the hash of its canonical spec).
+        The sweep id (the hash of its canonical spec); a plain folder name.
+
+    Attributes
+    ----------
+    root
+        ``<store>/<sweep-id>`` (created by ``write_spec`` or the first publish).
+    cube, journal, spec
+        ``root / "cube.h5"``, ``root / "journal"``, ``root / "spec.json"``.
     """
 
-    root: Path
-    sweep_id: str
-
-    def __post_init__(self):
-        sid = str(self.sweep_id)
-        if not sid or "/" in sid or sid.startswith("."):
+    def __init__(self, store_root, sweep_id: str):
+        sid = str(sweep_id)
+        if not sid or "/" in sid or "\\" in sid or sid.startswith("."):
             raise ValueError(f"sweep_id must be a plain folder name, got {sid!r}")
-        object.__setattr__(self, "root", Path(self.root))
-        object.__setattr__(self, "sweep_id", sid)
+        self.store_root = Path(store_root)
+        self.sweep_id = sid
+        self.root = self.store_root / sid
+        self.cube = self.root / CUBE_NAME
+        self.journal = self.root / JOURNAL_DIR
+        self.spec = self.root / SPEC_NAME
 
-    @property
-    def folder(self) -> Path:
-        """``<store>/<sweep-id>``."""
-        return self.root / self.sweep_id
+    def __repr__(self) -> str:
+        return f"SweepDir({str(self.store_root)!r}, {self.sweep_id!r})"
 
-    @property
-    def cube(self) -> Path:
-        """``<store>/<sweep-id>/cube.h5``."""
-        return self.folder / CUBE_NAME
+    def __eq__(self, other) -> bool:
+        return isinstance(other, SweepDir) and (self.store_root, self.sweep_id) == (other.store_root, other.sweep_id)
 
-    @property
-    def spec(self) -> Path:
-        """``<store>/<sweep-id>/spec.json``."""
-        return self.folder / SPEC_NAME
+    def __hash__(self) -> int:
+        return hash((self.store_root, self.sweep_id))
 
-    @property
-    def journal(self) -> Path:
-        """``<store>/<sweep-id>/journal``."""
-        return self.folder / JOURNAL_DIR
+    def write_spec(self, spec_json: str) -> Path:
+        """Write ``spec.json`` atomically (the spec as submitted); returns its path."""
+        return atomic_write(self.spec, lambda tmp: tmp.write_text(spec_json, encoding="utf-8"))
 
 
 def temp_name(path: Path) -> Path:
