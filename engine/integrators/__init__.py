@@ -28,7 +28,8 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
       Karnopp band edges). Adaptive methods should step exactly onto them (see dopri5);
     - ``observe(t0, y0, t1, y1, ymid, p, sq, obs)``: call after every accepted step
       (``ymid`` = state at ``(t0 + t1) / 2`` from the method's dense output);
-    - ``record``: True when step end times must be appended to ``rec`` (API only).
+    - ``record``: True when accepted steps must be appended to ``rec`` (API only);
+    - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation).
 
     It returns ``Stepper(alloc, segment)``, two njit functions:
 
@@ -43,8 +44,9 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
         square-wave switch (``sq`` changed: re-evaluate any FSAL/cached stage) and
         ``FRESH_NONE`` at other stops (caches stay valid). Step-size state carried between
         segments lives in ``work``. Counters go to ``ctr[CTR_STEPS]``, ``ctr[CTR_REJECTED]``,
-        ``ctr[CTR_EVALS]``; with ``problem.record`` each accepted step's end time goes to
-        ``rec[ctr[CTR_NREC]]`` (stop recording when ``rec`` is full). Returns an
+        ``ctr[CTR_EVALS]``; with ``problem.record`` call
+        ``engine.integrators.problem.record_step(rec, ctr, cfg, t, y)`` after each accepted step (``rec`` is
+        ``(capacity, 1 + n)``: time, then state). Returns an
         ``engine.status`` code: ``OK``, ``FAILED`` (``ctr[CTR_STEPS] + ctr[CTR_REJECTED]``
         exceeded ``cfg[CFG_MAX_STEPS]`` or the step underflowed) or ``NON_FINITE``.
 
@@ -57,12 +59,13 @@ its module below and adding it to :data:`METHODS`; ``engine.kernels`` then build
 """
 from __future__ import annotations
 
+from . import dopri5, rk4
 from .problem import (CFG_ATOL, CFG_H, CFG_MAX_STEPS, CFG_RTOL, CFG_SIZE, CTR_EVALS,
                       CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS, FRESH_NONE, FRESH_START,
                       FRESH_SWITCH, Problem, Stepper)
 
 #: name -> method module (see the protocol above)
-METHODS: dict = {}  # rk4, dopri5 land in the next commits
+METHODS = {m.NAME: m for m in (rk4, dopri5)}
 
 __all__ = [
     "CFG_ATOL", "CFG_H", "CFG_MAX_STEPS", "CFG_RTOL", "CFG_SIZE", "CTR_EVALS", "CTR_NREC",

@@ -7,12 +7,17 @@ from __future__ import annotations
 
 from typing import Any, Callable, NamedTuple
 
+from numba import njit
+
 # cfg: float64 run-time settings of one point (no recompilation when they change)
 CFG_RTOL = 0        # relative tolerance (adaptive methods)
 CFG_ATOL = 1        # absolute tolerance (adaptive methods)
 CFG_H = 2           # nominal fixed step (fixed-step methods), set per point by the driver
 CFG_MAX_STEPS = 3   # budget of accepted + rejected steps
-CFG_SIZE = 4
+CFG_STEPS_PER_PERIOD = 4   # Settings.steps_per_period (read by the driver to set CFG_H)
+CFG_H_FREE = 5      # Settings.h, the fixed step without dither (read by the driver)
+CFG_RECORD_EVERY = 6       # API recording: keep every m-th accepted step
+CFG_SIZE = 7
 
 # ctr: int64 counters of one point
 CTR_STEPS = 0       # accepted steps
@@ -36,7 +41,8 @@ class Problem(NamedTuple):
     n_events: int          # number of kink functions (0: none)
     events: Callable       # events(t, y, p, sq, g): g[:n_events]
     observe: Callable      # observe(t0, y0, t1, y1, ymid, p, sq, obs)
-    record: bool = False   # append accepted step end times to rec
+    record: bool = False   # append accepted steps (time, state) to rec
+    needs_mid: bool = True # observe reads ymid (else methods may pass any array)
 
 
 class Stepper(NamedTuple):
@@ -45,3 +51,18 @@ class Stepper(NamedTuple):
     alloc: Callable        # alloc() -> work
     segment: Callable      # segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec) -> status
     extra: Any = None      # method-specific helpers (e.g. dense output), optional
+
+
+@njit
+def record_step(rec, ctr, cfg, t, y):
+    """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec`` (shape ``(capacity, 1 + n)``)
+    for every ``cfg[CFG_RECORD_EVERY]``-th accepted step; call after counting the step.
+    Silently stops when ``rec`` is full (the API reports truncation)."""
+    if ctr[CTR_STEPS] % max(1, int(cfg[CFG_RECORD_EVERY])) != 0:
+        return
+    i = ctr[CTR_NREC]
+    if i < rec.shape[0]:
+        rec[i, 0] = t
+        for j in range(y.size):
+            rec[i, 1 + j] = y[j]
+        ctr[CTR_NREC] = i + 1

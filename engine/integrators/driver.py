@@ -1,0 +1,88 @@
+"""The shared driver: the stop grid of one point, around any method's ``segment``.
+
+Stops (DESIGN.md §1: "an integrator must step exactly onto them, never across them"):
+
+- square-velocity: every switch ``t_k = k * (pi / omega)`` (computed from k, never
+  accumulated, :func:`engine.dither.switch_time`); the sign on ``(t_k, t_{k+1})`` is
+  ``square_sign(k)``; ``sq`` changes there, so the segment after a switch gets
+  ``FRESH_SWITCH``. Period boundaries are the even k.
+- sine dither: every period ``k * (2 pi / omega)`` only when an observable needs the
+  period boundaries (``period_stops``); the sign stays +1 and caches stay valid.
+- always ``t_transient`` (the observer starts there) and ``t_end``.
+
+The fixed step of non-adaptive methods (``cfg[CFG_H]``) is set here per point:
+``(pi / omega) / steps_per_period`` for a square wave (divides the half-period),
+``(2 pi / omega) / steps_per_period`` for a sine (divides the period), ``Settings.h`` without
+dither (methods split each segment into ``ceil(length / h)`` equal steps).
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .. import params as P
+from .. import status as S
+from ..dither import CODE, NONE, SQUARE_VELOCITY, square_sign, switch_time
+from .problem import (CFG_H, CFG_H_FREE, CFG_STEPS_PER_PERIOD, FRESH_NONE, FRESH_START,
+                      FRESH_SWITCH)
+
+
+def make_solve(stepper, observer, dither: str):
+    """njit ``solve(work, y, p, cfg, obs, ctr, rec) -> status`` for one point.
+
+    ``y`` holds the initial state and is advanced to ``t_end`` in place; ``obs`` must have
+    been initialised (``observer.init``).
+    """
+    kind = CODE[dither]
+    square = kind == SQUARE_VELOCITY
+    grid = square or (kind != NONE and observer.period_stops)
+    segment, start, stop = stepper.segment, observer.start, observer.stop
+
+    @njit
+    def solve(work, y, p, cfg, obs, ctr, rec):
+        t_end, t_tr, omega = p[P.T_END], p[P.T_TRANSIENT], p[P.OMEGA]
+        cfg[CFG_H] = _nominal_step(kind, omega, cfg)
+        t = 0.0
+        k = 1
+        sq = 1.0
+        fresh = FRESH_START
+        started = False
+        if t_tr <= 0.0:
+            start(t, y, p, sq, obs)
+            started = True
+        while t < t_end:
+            t_grid = np.inf
+            if grid:
+                t_grid = switch_time(k, omega) if square else switch_time(2 * k, omega)
+            t_next = min(t_grid, t_end)
+            if not started and t_tr < t_next:
+                t_next = t_tr
+            status = segment(work, y, t, t_next, p, sq, fresh, cfg, obs, ctr, rec)
+            if status != S.OK:
+                return status
+            t = t_next
+            fresh = FRESH_NONE
+            if not started and t == t_tr:
+                start(t, y, p, sq, obs)
+                started = True
+            if t == t_grid:
+                stop(t, y, p, (k % 2 == 0) if square else True, obs)
+                if square:
+                    sq = square_sign(k)
+                    fresh = FRESH_SWITCH
+                k += 1
+        for i in range(y.size):
+            if not np.isfinite(y[i]):
+                return S.NON_FINITE
+        return S.OK
+    return solve
+
+
+@njit
+def _nominal_step(kind, omega, cfg):
+    n = cfg[CFG_STEPS_PER_PERIOD]
+    if kind == SQUARE_VELOCITY:
+        return (np.pi / omega) / n
+    if kind != NONE:
+        return (2.0 * np.pi / omega) / n
+    return cfg[CFG_H_FREE]

@@ -1,0 +1,87 @@
+"""Classical fixed-step Runge-Kutta of order 4 (Kutta 1901; Hairer-Norsett-Wanner I, II.1).
+
+Each segment ``[t0, t1]`` between stops is split into ``m = ceil((t1 - t0) / h)`` equal
+steps with ``h = cfg[CFG_H]`` set by the driver, so a square-wave half-period holds exactly
+``Settings.steps_per_period`` steps and the last step lands on ``t1`` by assignment.
+Kinks of the right-hand side inside a step are not located (fixed step): near them the
+error is of lower order. The midpoint passed to observers comes from the third-order
+continuous extension (dense weights in :data:`TABLEAU`).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import status as S
+from .problem import (CFG_H, CFG_MAX_STEPS, CTR_EVALS, CTR_REJECTED, CTR_STEPS, Stepper,
+                      record_step)
+from .tableau import ButcherTableau
+
+NAME = "rk4"
+ORDER = 4
+ADAPTIVE = False
+TABLEAU = ButcherTableau(
+    name=NAME,
+    c=[0.0, 0.5, 0.5, 1.0],
+    a=[[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1.0, 0]],
+    b=[1 / 6, 1 / 3, 1 / 3, 1 / 6],
+    order=4,
+    # b_i(theta) = sum_j dense[i, j] theta**(j+1): the classical cubic extension
+    dense=[[1.0, -1.5, 2 / 3], [0.0, 1.0, -2 / 3], [0.0, 1.0, -2 / 3], [0.0, -0.5, 2 / 3]],
+)
+
+
+def _mid_weights(tab: ButcherTableau) -> tuple:
+    """Continuous-extension weights at theta = 1/2 (5/24, 1/6, 1/6, -1/24)."""
+    th = 0.5 ** np.arange(1, tab.dense.shape[1] + 1)
+    return tuple(float(w) for w in tab.dense @ th)
+
+
+def make_stepper(problem) -> Stepper:
+    """Kernel factory (protocol in engine.integrators)."""
+    n, rhs, observe = problem.n, problem.rhs, problem.observe
+    record, needs_mid = problem.record, problem.needs_mid
+    a21, a32, a43 = (float(TABLEAU.a[1, 0]), float(TABLEAU.a[2, 1]), float(TABLEAU.a[3, 2]))
+    b1, b2, b3, b4 = (float(x) for x in TABLEAU.b)
+    c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
+    m1, m2, m3, m4 = _mid_weights(TABLEAU)
+
+    @njit
+    def alloc():
+        return np.empty((7, n))
+
+    @njit
+    def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
+        k1, k2, k3, k4, yt, y0, ym = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
+        m = max(1, int(math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12))))
+        h = (t1 - t0) / m
+        for j in range(m):
+            t = t0 + j * h
+            rhs(t, y, p, sq, k1)
+            for i in range(n):
+                yt[i] = y[i] + h * a21 * k1[i]
+            rhs(t + c2 * h, yt, p, sq, k2)
+            for i in range(n):
+                yt[i] = y[i] + h * a32 * k2[i]
+            rhs(t + c3 * h, yt, p, sq, k3)
+            for i in range(n):
+                yt[i] = y[i] + h * a43 * k3[i]
+            rhs(t + c4 * h, yt, p, sq, k4)
+            for i in range(n):
+                y0[i] = y[i]
+                if needs_mid:
+                    ym[i] = y[i] + h * (m1 * k1[i] + m2 * k2[i] + m3 * k3[i] + m4 * k4[i])
+                y[i] += h * (b1 * k1[i] + b2 * k2[i] + b3 * k3[i] + b4 * k4[i])
+            t_new = t1 if j == m - 1 else t0 + (j + 1) * h
+            ctr[CTR_STEPS] += 1
+            ctr[CTR_EVALS] += 4
+            observe(t, y0, t_new, y, ym, p, sq, obs)
+            if record:
+                record_step(rec, ctr, cfg, t_new, y)
+            if ctr[CTR_STEPS] + ctr[CTR_REJECTED] > cfg[CFG_MAX_STEPS]:
+                return S.FAILED
+        return S.OK
+
+    return Stepper(alloc, segment)

@@ -1,0 +1,113 @@
+"""Kernel factory: one Scene + method -> jitted point and block integrators, cached per process.
+
+Everything a Scene switches off is absent from the compiled code (its flags are Python
+constants closed over by the njit factories). Kernels are cached with
+``functools.lru_cache`` on ``(scene, record)``; a worker process compiles each scene once.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Callable, NamedTuple
+
+import numpy as np
+from numba import njit
+
+from . import params as P
+from . import status as S
+from .integrators import METHODS
+from .integrators.driver import make_solve
+from .integrators.problem import (CFG_ATOL, CFG_H_FREE, CFG_MAX_STEPS, CFG_RECORD_EVERY,
+                                  CFG_RTOL, CFG_SIZE, CFG_STEPS_PER_PERIOD, CTR_SIZE, Problem)
+from .observables import make_observer
+from .settings import Settings
+from .systems import make_system
+
+
+class PointKernel(NamedTuple):
+    """Compiled pieces of one scene (sizes are Python ints)."""
+
+    n: int                 # state size
+    obs_size: int          # accumulator length
+    names: tuple           # scalar outputs, column order of ``out``
+    alloc: Callable        # alloc() -> work (method scratch)
+    run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
+
+
+def settings_to_cfg(settings: Settings, record_every: int = 1) -> np.ndarray:
+    """Pack :class:`Settings` into the float64 ``cfg`` array of the kernels."""
+    cfg = np.zeros(CFG_SIZE)
+    cfg[CFG_RTOL], cfg[CFG_ATOL] = settings.rtol, settings.atol
+    cfg[CFG_MAX_STEPS] = settings.max_steps
+    cfg[CFG_STEPS_PER_PERIOD] = settings.steps_per_period
+    cfg[CFG_H_FREE] = settings.h
+    cfg[CFG_RECORD_EVERY] = record_every
+    return cfg
+
+
+def method_module(scene):
+    """The integrator module of ``scene.method`` (ValueError naming the known ones)."""
+    try:
+        return METHODS[scene.method]
+    except KeyError:
+        raise ValueError(f"method: unknown integrator {scene.method!r}; "
+                         f"known: {sorted(METHODS)} (or 'averaged', 'hbm')") from None
+
+
+@lru_cache(maxsize=None)
+def point_kernel(scene, record: bool = False) -> PointKernel:
+    """Build (once per process) the one-point integrator of ``scene``."""
+    system = make_system(scene)
+    observer = make_observer(scene, system)
+    problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
+                      n_events=system.n_events, events=system.events,
+                      observe=observer.observe, record=record, needs_mid=observer.needs_mid)
+    stepper = method_module(scene).make_stepper(problem)
+    solve = make_solve(stepper, observer, scene.dither)
+    init, obs_init, finish = system.init, observer.init, observer.finish
+
+    @njit
+    def run_point(p, cfg, work, y, obs, out, ctr, rec):
+        init(p, y)
+        obs_init(obs)
+        ctr[:] = 0
+        status = solve(work, y, p, cfg, obs, ctr, rec)
+        if status != S.OK:
+            out[:] = np.nan
+            return status
+        finish(p[P.T_END], y, p, obs, out)
+        for j in range(out.size):
+            if not np.isfinite(out[j]):
+                return S.NON_FINITE
+        return S.OK
+
+    return PointKernel(system.n, observer.size, observer.names, stepper.alloc, run_point)
+
+
+@lru_cache(maxsize=None)
+def block_kernel(scene) -> Callable:
+    """njit ``run(points, p, cfg, out, status, counters)`` over a block of grid points.
+
+    ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out`` ``(m, k)``
+    in the order of the scene's scalar outputs; ``status`` ``(m,)`` int8; ``counters``
+    ``(m, 3)`` int64: accepted steps, rejected steps, evaluations.
+    """
+    pk = point_kernel(scene, False)
+    n, size, k = pk.n, pk.obs_size, len(pk.names)
+    alloc, run_point = pk.alloc, pk.run_point
+    cols = (P.W, P.OMEGA, P.V_REF, P.VD)
+
+    @njit
+    def run(points, p, cfg, out, status, counters):
+        q = p.copy()
+        y, obs, o = np.empty(n), np.empty(size), np.empty(k)
+        work = alloc()
+        ctr = np.zeros(CTR_SIZE, np.int64)
+        rec = np.empty((0, n + 1))
+        for j in range(points.shape[0]):
+            q[:] = p
+            for c in range(4):
+                q[cols[c]] = points[j, c]
+            status[j] = run_point(q, cfg, work, y, obs, o, ctr, rec)
+            out[j, :] = o
+            counters[j, :] = ctr[:3]
+    return run

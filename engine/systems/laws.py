@@ -1,0 +1,141 @@
+"""Friction laws as compile-time specialised njit closures, shared by both systems.
+
+``make_law(scene) -> law(u, z, hold, p) -> (dz, F, alpha)``
+
+- ``lugre`` (Eq. 2.3, alpha = 1): ``dz = u - sigma0 |u| z / g(u)``,
+  ``F = sigma0 z + sigma1(u) dz + sigma2 u``. ``alpha`` is reported as 0 when
+  ``|u| < p[STICK_BAND]`` (LuGre has no stick phase of its own; this is the
+  stick indicator of the observables) and 1 otherwise.
+- ``elastoplastic`` (Eqs. 2.3, 2.6, 2.7 with |z|, DESIGN.md §1): ``dz = u - alpha sigma0 |u| z / g``.
+- ``stribeck`` / ``coulomb`` (Eq. 2.2, static): while sliding, ``F = g(u) sgn(u) + sigma2 u``
+  (coulomb: ``g = fc``). **Stick law (Karnopp band)**: when ``|u| < p[STICK_BAND]`` the
+  friction is the force that holds ``u`` still, ``hold`` (given by the system, e.g.
+  ``e + f_slow + f_dither`` for the slider), clipped to ``+-f_break`` with
+  ``f_break = fs`` (stribeck) or ``fc`` (coulomb). Inside the band ``du/dt = 0`` while
+  ``|hold| <= f_break`` (stick, alpha = 0); beyond it the surplus accelerates ``u`` out
+  of the band (breakaway). ``z`` is unused (``dz = 0``).
+
+Effect flags of the Scene fold at compile time: ``stribeck=False`` uses ``g = fc``
+without an exp, ``bristle_damping=False`` drops ``sigma1(u)``, ``viscous=False``
+drops ``sigma2 u``.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .. import params as P
+from ..friction.elastoplastic import alpha as ep_alpha
+from ..friction.stribeck import _decay
+
+
+def make_g(stribeck: bool):
+    """njit ``g(u, p)``, Eq. 2.4 (``fc`` alone when the scene has no Stribeck effect)."""
+    if stribeck:
+        @njit(inline="always")
+        def g(u, p):
+            return p[P.FC] + (p[P.FS] - p[P.FC]) * _decay(u / p[P.VS], p[P.DELTA])
+    else:
+        @njit(inline="always")
+        def g(u, p):
+            return p[P.FC]
+    return g
+
+
+def make_damping(bristle_damping: bool):
+    """njit ``sigma1(u, p)``, Eq. 2.5 (0 when the scene has no bristle damping)."""
+    if bristle_damping:
+        @njit(inline="always")
+        def sigma1(u, p):
+            return p[P.SIGMA1] * _decay(u / p[P.VD], p[P.DELTA_D])
+    else:
+        @njit(inline="always")
+        def sigma1(u, p):
+            return 0.0
+    return sigma1
+
+
+def make_law(scene):
+    """njit ``law(u, z, hold, p) -> (dz, F, alpha)`` for ``scene.friction``."""
+    maker = {"lugre": _bristle_law, "elastoplastic": _bristle_law,
+             "stribeck": _static_law, "coulomb": _static_law}[scene.friction]
+    return maker(scene)
+
+
+def _bristle_law(scene):
+    g = make_g(scene.stribeck)
+    sigma1 = make_damping(scene.bristle_damping)
+    viscous = scene.viscous
+    damping = scene.bristle_damping
+    elasto = scene.friction == "elastoplastic"
+
+    @njit(inline="always")
+    def law(u, z, hold, p):
+        sigma0 = p[P.SIGMA0]
+        gu = g(u, p)
+        if elasto:
+            a = ep_alpha(z, u, gu, sigma0, p[P.LAM])
+            dz = u - a * sigma0 * abs(u) * z / gu
+        else:
+            a = 0.0 if abs(u) < p[P.STICK_BAND] else 1.0
+            dz = u - sigma0 * abs(u) * z / gu
+        F = sigma0 * z
+        if damping:
+            F += sigma1(u, p) * dz
+        if viscous:
+            F += p[P.SIGMA2] * u
+        return dz, F, a
+    return law
+
+
+def _static_law(scene):
+    stribeck = scene.friction == "stribeck" and scene.stribeck
+    g = make_g(stribeck)
+    viscous = scene.viscous
+
+    @njit(inline="always")
+    def law(u, z, hold, p):
+        if abs(u) < p[P.STICK_BAND]:
+            fb = p[P.FS] if stribeck else p[P.FC]
+            return 0.0, min(max(hold, -fb), fb), (0.0 if abs(hold) <= fb else 1.0)
+        F = g(u, p) * (1.0 if u > 0.0 else -1.0)
+        if viscous:
+            F += p[P.SIGMA2] * u
+        return 0.0, F, 1.0
+    return law
+
+
+def make_kinks(scene):
+    """``(n_events, kinks(u, z, hold, p, g))``: functions whose sign changes mark the
+    corners of the law (see engine.integrators protocol).
+
+    - lugre: ``u`` (the ``|u|`` in dz);
+    - elastoplastic: ``u``, ``|z| - z_ba(u)``, ``|z| - z_ss(u)`` (Eq. 2.7 boundaries);
+    - static laws: ``u - band``, ``u + band`` (Karnopp band edges), ``f_break - |hold|``
+      (breakaway, inside the band only; +1 outside).
+    """
+    if scene.friction == "lugre":
+        @njit(inline="always")
+        def kinks(u, z, hold, p, out):
+            out[0] = u
+        return 1, kinks
+    if scene.friction == "elastoplastic":
+        gfun = make_g(scene.stribeck)
+
+        @njit(inline="always")
+        def kinks(u, z, hold, p, out):
+            zss = gfun(u, p) / p[P.SIGMA0]
+            out[0] = u
+            out[1] = abs(z) - p[P.LAM] * zss
+            out[2] = abs(z) - zss
+        return 3, kinks
+    stribeck = scene.friction == "stribeck" and scene.stribeck
+
+    @njit(inline="always")
+    def kinks(u, z, hold, p, out):
+        band = p[P.STICK_BAND]
+        out[0] = u - band
+        out[1] = u + band
+        # breakaway matters only inside the band; outside it the law has no hold kink
+        out[2] = ((p[P.FS] if stribeck else p[P.FC]) - abs(hold)) if abs(u) < band else 1.0
+    return 3, kinks
