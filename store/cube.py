@@ -269,12 +269,17 @@ def open_cube(path) -> xr.Dataset:
     FileNotFoundError
         If there is no file at ``path``.
     ValueError
-        If the file is not a ditherlab cube (dims other than ``AXES``, no ``status``).
+        If the file is unreadable or not a ditherlab cube (dims other than ``AXES``,
+        no ``status``).
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"no cube at {path}; has the sweep been published yet?")
-    with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
-        ds = f.load()
+    try:
+        with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
+            ds = f.load()
+    except (OSError, KeyError, ValueError) as err:  # h5py reports a torn file as KeyError/OSError
+        raise ValueError(f"the cube at {path} is unreadable ({err}); submit the spec again to "
+                         f"republish it from the journal") from err
     _check_layout(ds, f"open_cube({path})")
     return ds

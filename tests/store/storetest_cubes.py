@@ -1,0 +1,29 @@
+"""Small hand-made cubes for the store tests (no engine: the store never computes).
+
+Imported by name (pytest puts this folder on sys.path; tests/ is not a package)."""
+import numpy as np
+
+import store
+
+OUTPUTS = {
+    "F_mean": ("mean friction force after the transient", "1"),
+    "long_stick_fraction": ("fraction of time in sticking runs longer than long_stick", "1"),
+}
+COORDS = {"W": [0.0, 0.5, 1.0], "omega": [10.0, 100.0, 1000.0, 1e4], "v_ref": [0.1, 0.2], "v_d": [0.1]}
+ATTRS = {"sweep_id": "0123456789abcdef", "name": "unit-cube", "spec": '{"name":"unit-cube"}',
+         "engine_settings": {"rtol": 1e-6, "atol": 1e-8, "method": "dopri5"}, "adaptive": True}
+
+
+def make_cube(coords=COORDS, outputs=OUTPUTS, attrs=ATTRS, **kw):
+    return store.empty_cube(coords, outputs, attrs, **kw)
+
+
+def block_arrays(ds, index, seed=0):
+    """Deterministic results for the points ``index``: value = flat index + 0.25 etc."""
+    rng = np.random.default_rng(seed)
+    n = len(index)
+    values = {name: np.asarray(index, float) + 0.25 * k for k, name in enumerate(store.output_names(ds))}
+    status = rng.choice(np.array([0, 0, 0, 2, 3], np.int8), size=n)
+    return dict(values=values, status=status, cost_s=rng.random(n), steps=np.arange(n) * 7,
+                evals=np.arange(n) * 43)
+

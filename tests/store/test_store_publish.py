@@ -1,0 +1,101 @@
+"""Atomic publish (DESIGN.md §4): a reader sees the old cube or the new one, never a torn
+file, even when the writer is killed with SIGKILL in the middle of an HDF5 write."""
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import store
+from store.layout import temp_name
+from storetest_cubes import block_arrays, make_cube
+from storetest_writer import noise
+
+HERE = Path(__file__).parent
+N_BIG = 600  # 600 x 600 points, two outputs: ~3 MB of zlib-resistant data, ~0.25 s a publish
+
+
+def _dead_pid() -> int:
+    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    return int(proc.stdout)
+
+
+def _temps(folder: Path) -> list[Path]:
+    return sorted(folder.glob(".*.tmp-*"))
+
+
+def test_publish_leaves_only_the_cube(cube, tmp_path):
+    path = store.publish(cube, tmp_path / "sweep" / "cube.h5")
+    store.publish(cube, path)  # replacing an existing cube
+    assert sorted(p.name for p in path.parent.iterdir()) == ["cube.h5"]
+
+
+def test_writer_dead_before_rename_leaves_old_cube_readable(cube, tmp_path):
+    path = store.publish(cube, tmp_path / "cube.h5")
+    orphan = temp_name(path).with_name(f".cube.h5.tmp-{_dead_pid()}-deadbeef")
+    orphan.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 1000)  # a torn HDF5 file, never renamed
+    xr.testing.assert_identical(store.open_cube(path), cube)
+    index = np.arange(5)
+    store.fill(cube, index, **block_arrays(cube, index))
+    store.publish(cube, path)  # the next publish cleans the dead writer's leftover
+    assert not orphan.exists() and _temps(tmp_path) == []
+    xr.testing.assert_identical(store.open_cube(path), cube)
+
+
+def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatch):
+    path = store.publish(cube, tmp_path / "cube.h5")
+    before = path.read_bytes()
+
+    def broken(self, target, **kw):
+        Path(target).write_bytes(b"half a file")
+        raise OSError("disk full (simulated)")
+
+    monkeypatch.setattr(xr.Dataset, "to_netcdf", broken)
+    with pytest.raises(OSError, match="disk full"):
+        store.publish(make_cube(), path)
+    assert path.read_bytes() == before and _temps(tmp_path) == []
+
+
+def _kill_mid_write(path: Path, fraction: float) -> tuple[subprocess.Popen, int]:
+    """Start the writer, let it publish twice, then SIGSTOP it while a temporary file
+    exists (so it is provably between create and rename) and SIGKILL it."""
+    proc = subprocess.Popen([sys.executable, str(HERE / "storetest_writer.py"), str(path), str(N_BIG)],
+                            stdout=subprocess.PIPE, text=True)
+    lines = iter(proc.stdout)
+    assert next(lines).strip() == "start 0"
+    t = time.monotonic()
+    assert next(lines).strip() == "done 0" and next(lines).strip() == "start 1"
+    assert next(lines).strip() == "done 1"
+    duration = time.monotonic() - t
+    assert next(lines).strip() == "start 2"
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 60:
+        if time.monotonic() - t0 >= fraction * duration and _temps(path.parent):
+            os.kill(proc.pid, signal.SIGSTOP)
+            if _temps(path.parent):
+                break
+            os.kill(proc.pid, signal.SIGCONT)
+        time.sleep(0.002)
+    os.kill(proc.pid, signal.SIGKILL)
+    out = proc.communicate()[0]
+    done = [int(line.split()[1]) for line in out.splitlines() if line.startswith("done")]
+    return proc, max([1, *done])
+
+
+@pytest.mark.parametrize("fraction", [0.15, 0.6])
+def test_sigkill_mid_publish_leaves_previous_generation(tmp_path, fraction):
+    path = tmp_path / "sweep" / "cube.h5"
+    proc, last_done = _kill_mid_write(path, fraction)
+    assert proc.returncode == -signal.SIGKILL
+    assert _temps(path.parent), "the writer should have died between create and rename"
+    ds = store.open_cube(path)
+    assert ds.attrs["generation"] == last_done
+    np.testing.assert_array_equal(ds["b"].values, last_done)
+    np.testing.assert_array_equal(ds["a"].values, noise(N_BIG) + last_done)
+    store.publish(ds, path)
+    assert _temps(path.parent) == []
