@@ -29,6 +29,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 TOL = 1e-12
 
@@ -140,3 +141,97 @@ class RosenbrockTableau:
         alpha, Gamma, b = original_form(self.gamma, self.a, self.C, self.m)
         s = self.stages
         return complex(1 + z * b @ np.linalg.solve(np.eye(s) - z * (alpha + Gamma), np.ones(s)))
+
+
+# --------------------------------------------------------------------------- kernels
+@njit
+def lu_factor(M, piv):
+    """In-place LU decomposition with partial pivoting of a small dense ``M``.
+
+    Returns False when ``M`` is singular (a zero pivot); ``piv[k]`` is the row swapped
+    with row ``k``.
+    """
+    n = M.shape[0]
+    for k in range(n):
+        pk, big = k, abs(M[k, k])
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > big:
+                pk, big = i, abs(M[i, k])
+        if big == 0.0:
+            return False
+        piv[k] = pk
+        if pk != k:
+            for j in range(n):
+                M[k, j], M[pk, j] = M[pk, j], M[k, j]
+        for i in range(k + 1, n):
+            M[i, k] /= M[k, k]
+            for j in range(k + 1, n):
+                M[i, j] -= M[i, k] * M[k, j]
+    return True
+
+
+@njit
+def lu_solve(M, piv, b):
+    """Solve ``M x = b`` in place (``b`` becomes ``x``) with the factors of :func:`lu_factor`."""
+    n = M.shape[0]
+    for k in range(n):
+        pk = piv[k]
+        if pk != k:
+            b[k], b[pk] = b[pk], b[k]
+    for i in range(n):
+        for j in range(i):
+            b[i] -= M[i, j] * b[j]
+    for i in range(n - 1, -1, -1):
+        for j in range(i + 1, n):
+            b[i] -= M[i, j] * b[j]
+        b[i] /= M[i, i]
+
+
+SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
+
+
+def make_fd_jacobian(n, n_err, rhs):
+    """njit ``jac(t, y, f0, p, sq, J, yt, ft, floor)``: forward-difference ``J = df/dy``.
+
+    Columns ``j < n_err`` with increment ``sqrt(eps) (|y_j| + floor)`` (``floor`` a magnitude
+    below which ``y_j`` is negligible, e.g. ``atol / rtol``); the other columns (quadrature
+    states, which nothing depends on) are zero. ``f0 = f(t, y)``; ``n_err`` evaluations.
+    """
+    @njit
+    def jac(t, y, f0, p, sq, J, yt, ft, floor):
+        for k in range(n):
+            yt[k] = y[k]
+        for j in range(n_err):
+            yj = y[j]
+            yt[j] = yj + SQRT_EPS * (abs(yj) + floor)
+            delta = yt[j] - yj
+            rhs(t, yt, p, sq, ft)
+            for i in range(n):
+                J[i, j] = (ft[i] - f0[i]) / delta
+            yt[j] = yj
+        for j in range(n_err, n):
+            for i in range(n):
+                J[i, j] = 0.0
+    return jac
+
+
+def make_time_derivative(n, rhs):
+    """njit ``dfdt(t, y, f0, p, sq, hh, ft, yt) -> bool``: forward difference of ``f`` in ``t``.
+
+    Increment ``max(sqrt(eps) hh, 64 eps |t|)`` (small against the step, which resolves the
+    explicit time dependence, yet well above the rounding of ``t``). Returns True when
+    ``f`` changed at all, i.e. when it depends on ``t`` explicitly.
+    """
+    eps = float(np.finfo(float).eps)
+
+    @njit
+    def dfdt(t, y, f0, p, sq, hh, ft, yt):
+        t2 = t + max(SQRT_EPS * hh, 64.0 * eps * abs(t))
+        delta = t2 - t
+        rhs(t2, y, p, sq, ft)
+        depends = False
+        for i in range(n):
+            ft[i] = (ft[i] - f0[i]) / delta
+            depends = depends or ft[i] != 0.0
+        return depends
+    return dfdt
