@@ -3,7 +3,8 @@
 Every function takes a cube (``xarray.Dataset`` with dims ``AXES``) and an optional
 ``sel``: a dict ``axis -> value`` picking the nearest grid value of that axis
 (``{"v_d": 0.1}``; strings such as ``"0.1"`` from a command line are accepted).
-A value off the grid by more than half a grid step is refused, so asking for
+A value beyond either end of the grid by more than half the end step is refused
+(any tolerance ~1e-9 for a one-value axis), so asking for
 ``v_d = 0.01`` of a cube that holds only ``v_d = 0.1`` is an error, not a silent
 substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
 """
@@ -29,9 +30,12 @@ def _nearest(ds: xr.Dataset, axis: str, value) -> int:
         raise ValueError(f"sel[{axis!r}]: expected a number, got {value!r}") from None
     grid = ds[axis].values
     ordered = np.sort(grid)
-    half_step = 0.5 * np.min(np.diff(ordered)) if grid.size > 1 else 1e-9 * max(1.0, abs(x))
     i = int(np.argmin(np.abs(grid - x)))
-    if abs(grid[i] - x) > half_step and not ordered[0] < x < ordered[-1]:
+    if grid.size == 1:
+        tolerance = 1e-9 * max(1.0, abs(x))
+    else:  # beyond an end of the grid: half of the step at that end
+        tolerance = 0.5 * (ordered[1] - ordered[0] if x < ordered[0] else ordered[-1] - ordered[-2])
+    if abs(grid[i] - x) > tolerance and not ordered[0] < x < ordered[-1]:
         raise ValueError(f"sel[{axis!r}] = {x:g} is off the grid; available {axis} values: "
                          f"{_show(grid)}")
     return i
@@ -93,11 +97,10 @@ def zone_map(ds: xr.Dataset, var: str = "long_stick_fraction", threshold: float 
     return zone.rename("stick_slip_zone")
 
 
-def _unstable(ds: xr.Dataset, sel) -> xr.DataArray:
-    if "stable" in ds:
-        return plane(ds, "stable", ("v_ref", "W"), sel, "stability_chart") == 0
-    if "max_real_eig" in ds:
-        return plane(ds, "max_real_eig", ("v_ref", "W"), sel, "stability_chart") > 0
+def _stability_source(ds: xr.Dataset) -> str:
+    for name in ("stable", "max_real_eig"):
+        if name in output_names(ds):
+            return name
     raise ValueError(f"stability_chart: needs the output 'stable' or 'max_real_eig' (method = 'averaged'); "
                      f"the cube has {output_names(ds)}")
 
@@ -115,9 +118,10 @@ def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
         int8 over ``("v_ref", "W")`` (W ascending): ``STABLE`` 0, ``PU`` 1, ``SU`` 2,
         ``NO_DATA`` -1; a CF flag variable (``flag_values``, ``flag_meanings``).
     """
-    source = "stable" if "stable" in ds else "max_real_eig"
-    valid = plane(ds, source, ("v_ref", "W"), sel, "stability_chart").notnull().sortby("W")
-    unstable = _unstable(ds, sel).sortby("W") & valid
+    source = _stability_source(ds)
+    values = plane(ds, source, ("v_ref", "W"), sel, "stability_chart").sortby("W")
+    valid = values.notnull()
+    unstable = ((values == 0) if source == "stable" else (values > 0)) & valid
     primary = np.logical_and.accumulate(unstable.values, axis=1)
     labels = np.where(~valid.values, NO_DATA, np.where(primary, PU, np.where(unstable.values, SU, STABLE)))
     chart = xr.DataArray(labels.astype(np.int8), coords=valid.coords, dims=valid.dims, name="stability")

@@ -1,0 +1,124 @@
+"""Queries on hand-made cubes whose answers are known by construction.
+
+Labels follow DESIGN.md §1: PU = unstable and connected to the smallest W (W = 0 on the
+paper's Fig. 9) through unstable points at the same v_ref; SU = unstable but separated
+from it by a stable point. The store also treats a missing point as a separation.
+"""
+import numpy as np
+import pandas as pd
+import pytest
+
+import store
+from store import NO_DATA, PU, STABLE, SU
+
+U, S, X = 0.0, 1.0, np.nan  # unstable, stable, not computed (status 2)
+# rows: W = 0, 0.2, ..., 1.0; columns: five v_ref values
+STABLE_GRID = np.array([
+    [U, S, U, S, U, U],
+    [U, S, U, U, U, X],
+    [U, S, S, U, U, U],
+    [S, S, U, S, U, U],
+    [S, S, U, S, U, S],
+    [S, S, S, S, U, U],
+])
+EXPECTED = np.array([  # by the rule above, column by column
+    [PU, STABLE, PU, STABLE, PU, PU],
+    [PU, STABLE, PU, SU, PU, NO_DATA],
+    [PU, STABLE, STABLE, SU, PU, SU],
+    [STABLE, STABLE, SU, STABLE, PU, SU],
+    [STABLE, STABLE, SU, STABLE, PU, STABLE],
+    [STABLE, STABLE, STABLE, STABLE, PU, SU],
+])
+W = np.linspace(0.0, 1.0, 6)
+V_REF = np.array([0.05, 0.1, 0.2, 0.4, 0.8, 1.0])
+
+
+def averaged_cube(W=W, stable=STABLE_GRID, with_stable=True):
+    outputs = {"F_eff": ("averaged effective friction", "1"), "max_real_eig": ("largest real part", "1/tau")}
+    if with_stable:
+        outputs["stable"] = ("stable (1) or unstable (0)", "1")
+    ds = store.empty_cube({"W": W, "omega": [1000.0], "v_ref": V_REF, "v_d": [0.1, 0.01]}, outputs,
+                          {"name": "chart", "sweep_id": "c0ffee"})
+    grid = np.broadcast_to(stable[:, None, :, None], ds["status"].shape)
+    status = np.where(np.isnan(grid), store.FAILED, store.OK).astype(np.int8)
+    ds["status"].values[...] = status
+    if with_stable:
+        ds["stable"].values[...] = np.where(np.isnan(grid), np.nan, grid)
+    ds["max_real_eig"].values[...] = np.where(np.isnan(grid), np.nan, np.where(grid == U, 0.3, -0.2))
+    ds["F_eff"].values[...] = np.arange(ds["F_eff"].size).reshape(ds["F_eff"].shape)
+    return ds
+
+
+def test_pu_su_labels_by_construction():
+    chart = store.stability_chart(averaged_cube(), sel={"v_d": 0.1})
+    assert chart.dims == ("v_ref", "W") and chart.dtype == np.int8
+    np.testing.assert_array_equal(chart.values, EXPECTED.T)
+    assert chart.attrs["flag_values"].tolist() == [NO_DATA, STABLE, PU, SU]
+    assert chart.attrs["flag_meanings"].split() == ["no_data", "stable", "primary_unstable", "secondary_unstable"]
+
+
+def test_labels_from_max_real_eig_and_from_a_descending_w_axis():
+    from_eig = store.stability_chart(averaged_cube(with_stable=False), sel={"v_d": 0.01})
+    np.testing.assert_array_equal(from_eig.values, EXPECTED.T)
+    flipped = store.stability_chart(averaged_cube(W=W[::-1], stable=STABLE_GRID[::-1]), sel={"v_d": 0.1})
+    np.testing.assert_array_equal(flipped["W"].values, W)
+    np.testing.assert_array_equal(flipped.values, EXPECTED.T)
+
+
+def test_zone_map_threshold_and_missing_points():
+    outputs = {"long_stick_fraction": ("fraction in long sticks", "1")}
+    ds = store.empty_cube({"W": [0.0, 1.0], "omega": [10.0, 100.0, 1000.0], "v_ref": [0.1], "v_d": [0.1]}, outputs)
+    ds["long_stick_fraction"].values[..., 0, 0] = [[0.0, 0.05, 0.3], [0.0, 0.0, 0.7]]
+    ds["status"].values[..., 0, 0] = [[0, 0, 0], [0, 3, 0]]
+    zone = store.zone_map(ds)
+    assert zone.dims == ("W", "omega")
+    np.testing.assert_array_equal(zone.values, [[0.0, 1.0, 1.0], [0.0, np.nan, 1.0]])
+    np.testing.assert_array_equal(store.zone_map(ds, threshold=0.1).values, [[0, 0, 1], [0, np.nan, 1]])
+    assert zone["omega"].attrs["units"] == "rad per unit tau"  # axis metadata survives
+
+
+def test_effective_friction_curve_prefers_f_eff_and_masks_bad_points():
+    ds = averaged_cube()
+    curve = store.effective_friction_curve(ds, sel={"v_d": 0.1})
+    assert curve.name == "F_eff" and curve.dims == ("W", "v_ref")
+    expected = ds["F_eff"].isel(omega=0, v_d=0).where(ds["status"].isel(omega=0, v_d=0) == 0)
+    np.testing.assert_array_equal(curve.values, expected.values)
+    assert np.isnan(curve.values[1, 5])  # the failed point
+    simulated = store.empty_cube({"W": [0.0], "omega": [1.0], "v_ref": [0.1, 0.2], "v_d": [0.1]},
+                                 {"F_mean": ("mean friction", "1")})
+    assert store.effective_friction_curve(simulated).name == "F_mean"
+
+
+def test_table_rows_and_columns():
+    ds = averaged_cube()
+    frame = store.table(ds, var="F_eff", sel={"v_d": "0.01"})
+    assert isinstance(frame, pd.DataFrame)
+    assert list(frame.columns) == ["W", "omega", "v_ref", "v_d", "F_eff", "status"]
+    assert len(frame) == W.size * V_REF.size and set(frame["v_d"]) == {0.01}
+    first = frame.iloc[1]  # C order: v_ref varies fastest after the fixed v_d
+    assert (first["W"], first["v_ref"]) == (0.0, 0.1)
+    assert first["F_eff"] == ds["F_eff"].sel(W=0.0, v_ref=0.1, v_d=0.01).item()
+    assert list(store.table(ds).columns)[4:] == ["F_eff", "max_real_eig", "stable", "status"]
+
+
+def test_select_is_nearest_neighbour():
+    ds = averaged_cube()
+    assert store.select(ds, {"W": 0.27, "v_d": 0.012})["W"].values.tolist() == [0.2]
+    assert store.select(ds, {"v_ref": 1.04})["v_ref"].values.tolist() == [1.0]  # within half a step
+
+
+@pytest.mark.parametrize("call, message", [
+    (lambda ds: store.select(ds, {"vd": 0.1}), r"sel: unknown axis \['vd'\]; axes are \('W', 'omega', 'v_ref', 'v_d'\)"),
+    (lambda ds: store.select(ds, {"v_d": 0.5}), r"sel\['v_d'\] = 0.5 is off the grid; available v_d values: \[0.1, 0.01\]"),
+    (lambda ds: store.select(ds, {"omega": 10.0}), r"available omega values: \[1000\]"),
+    (lambda ds: store.select(ds, {"W": "fast"}), r"sel\['W'\]: expected a number, got 'fast'"),
+    (lambda ds: store.stability_chart(ds), r"stability_chart: axis 'v_d' has 2 values \[0.1, 0.01\]; choose one with sel"),
+    (lambda ds: store.zone_map(ds, sel={"v_d": 0.1}), r"zone_map: the cube has no variable 'long_stick_fraction'; available: \['F_eff'"),
+    (lambda ds: store.table(ds, var="F_mean"), r"table: the cube has no variable 'F_mean'"),
+    (lambda ds: store.effective_friction_curve(ds.drop_vars("F_eff"), sel={"v_d": 0.1}), r"needs 'F_eff' or 'F_mean'"),
+    (lambda ds: store.stability_chart(ds.drop_vars(["stable", "max_real_eig"]), sel={"v_d": 0.1}),
+     r"needs the output 'stable' or 'max_real_eig'"),
+])
+def test_error_messages(call, message):
+    with pytest.raises(ValueError, match=message):
+        call(averaged_cube())
