@@ -128,6 +128,8 @@ class Catalogue:
     def register(self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path) -> dict:
         """Add a sweep in state ``queued``, or refresh a known one (resubmission).
 
+        ``path`` is the sweep's folder (``SweepDir.root``), as for adopted cubes.
+
         A known sweep keeps its state, counts and creation time; its name, spec,
         sizes and path are overwritten. Returns the row.
         """
@@ -237,4 +239,4 @@ def _row_from_cube(cube: Path) -> dict | None:
                 state="partial" if pending else "done",
                 spec_json=spec if isinstance(spec, str) else A.canonical_json(spec),
                 n_points=int(status.size), n_blocks=0, done_points=int(status.size) - pending, failed_points=failed,
-                done_blocks=0, path=str(cube), created=str(created), updated=_now())
+                done_blocks=0, path=str(cube.parent), created=str(created), updated=_now())

@@ -3,10 +3,9 @@
 Every function takes a cube (``xarray.Dataset`` with dims ``AXES``) and an optional
 ``sel``: a dict ``axis -> value`` picking the nearest grid value of that axis
 (``{"v_d": 0.1}``; strings such as ``"0.1"`` from a command line are accepted).
-A value beyond either end of the grid by more than half the end step is refused
-(any tolerance ~1e-9 for a one-value axis), so asking for
-``v_d = 0.01`` of a cube that holds only ``v_d = 0.1`` is an error, not a silent
-substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
+A value beyond either end of the grid by more than half the end step (a relative
+1e-9 on a one-value axis) is refused, so asking for ``v_d = 0.01`` of a cube that
+holds only ``v_d = 0.1`` is an error, not a silent substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
 """
 from __future__ import annotations
 

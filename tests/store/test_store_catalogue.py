@@ -75,6 +75,7 @@ def test_cube_without_row_is_adopted(tmp_path):
     cat = store.Catalogue(tmp_path)
     row = cat.find("orphan")
     assert (row["sweep_id"], row["state"], row["spec_json"]) == ("feed01", "partial", '{"name":"orphan"}')
+    assert row["path"] == str(tmp_path / "feed01")
     assert (row["n_points"], row["done_points"], row["failed_points"]) == (status.size, status.size - 3, 2)
     assert [r["sweep_id"] for r in cat.list()] == ["feed01"]
 

@@ -1,0 +1,38 @@
+"""Store folder layout (README 'Store layout', DESIGN.md §5 default store)."""
+import pytest
+
+import store
+from store import layout
+
+
+def test_sweep_dir_paths_and_spec(tmp_path):
+    sweep = store.SweepDir(tmp_path, "b305ba3e9216")
+    assert sweep.root == tmp_path / "b305ba3e9216"
+    assert (sweep.cube.name, sweep.journal.name, sweep.spec.name) == ("cube.h5", "journal", "spec.json")
+    sweep.write_spec('{"name":"demo"}')
+    assert sweep.spec.read_text() == '{"name":"demo"}'
+    assert sorted(p.name for p in sweep.root.iterdir()) == ["spec.json"]  # no temporary left
+    assert sweep == store.SweepDir(str(tmp_path), "b305ba3e9216")
+
+
+@pytest.mark.parametrize("bad", ["", "../x", "a/b", ".hidden"])
+def test_sweep_dir_refuses_non_folder_names(tmp_path, bad):
+    with pytest.raises(ValueError, match="sweep_id must be a plain folder name"):
+        store.SweepDir(tmp_path, bad)
+
+
+def test_default_store(monkeypatch, tmp_path):
+    monkeypatch.delenv(layout.ENV_STORE, raising=False)
+    assert str(store.default_store()) == "ditherlab-store"
+    monkeypatch.setenv(layout.ENV_STORE, str(tmp_path))
+    assert store.default_store() == tmp_path
+
+
+def test_atomic_write_failure_leaves_nothing(tmp_path):
+    def fail(tmp):
+        tmp.write_text("partial")
+        raise RuntimeError("boom")
+
+    with pytest.raises(RuntimeError, match="boom"):
+        store.atomic_write(tmp_path / "f.txt", fail)
+    assert list(tmp_path.iterdir()) == []
