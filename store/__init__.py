@@ -14,16 +14,22 @@ How the sweep runner uses it (the submitting process is the only writer)::
 
     empty = store.empty_cube(coords, variables, attrs)  # outputs NaN, status 1
     journal = store.Journal(sweep.journal)
+    cube = store.rebuild(empty, journal)                # what earlier runs finished
+    store.publish(cube, sweep.cube)                     # a valid cube from the start
     todo = [b for b in blocks if b.id not in journal.done()]      # resume
     for block, result in finished(todo):                # as dask futures complete
-        journal.write(block.id, store.block_payload(
-            block.flat_index, result.outputs, result.status, result.cost_s,
-            result.steps, result.evals))
-        if every_few_blocks_or_last:
-            cube = store.rebuild(empty, journal)
+        payload = store.block_payload(block.flat_index, result.outputs, result.status,
+                                      result.cost_s, result.steps, result.evals)
+        journal.write(block.id, payload)                # durable from here on
+        store.fill_block(cube, payload)                 # O(block), no re-read
+        if every_few_seconds_or_last:
             store.publish(cube, sweep.cube)             # atomic replace
             counts = store.status_counts(cube)
             cat.update(sweep_id, state="running", done_points=..., failed_points=...)
+
+``rebuild`` re-reads every journal file (~1 ms a block): call it once when a run
+starts, not after every block. The journal, not the cube, is the durable record:
+a run killed at any instant resumes from ``journal.done()``.
 
 and how a user reads it::
 

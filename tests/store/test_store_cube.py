@@ -61,6 +61,10 @@ def test_roundtrip_is_identical(cube, tmp_path):
     xr.testing.assert_identical(cube, back)
     store.publish(back, path)  # republishing a reopened cube (with file encodings) is stable
     xr.testing.assert_identical(cube, store.open_cube(path))
+    more = np.array([1, 2])  # a reopened cube can be filled further (resume)
+    store.fill(back, more, **block_arrays(cube, more, seed=1))
+    store.fill(cube, more, **block_arrays(cube, more, seed=1))
+    xr.testing.assert_identical(cube, back)
 
 
 def test_fill_uses_c_order_over_axes(cube):
