@@ -240,7 +240,7 @@ def _encoding(ds: xr.Dataset) -> dict[str, dict]:
     for name, var in ds.data_vars.items():
         enc[name] = dict(COMPRESSION)
         if np.issubdtype(var.dtype, np.integer):
-            enc[name]["_FillValue"] = None  # a fill value would make xarray decode int8 as float
+            enc[name]["_FillValue"] = None  # with a fill value xarray decodes int8 as float (pydata/xarray#1576)
     return enc
 
 
