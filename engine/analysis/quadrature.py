@@ -1,0 +1,96 @@
+"""Phase average ``<.>`` over one dither period (Eq. 5.3 / 5.17).
+
+For a velocity dither ``u = v + W s(theta)`` with ``theta`` uniform over a period:
+
+* **square** (``s = sq``, Sec. 5.1): ``<f> = (f(v + W) + f(v - W)) / 2`` -- exact,
+  two points (Eqs. 5.6b, 5.9);
+* **sine** (``s = sin``, Sec. 7; also the sine *force* of Sec. 5.2, whose velocity
+  fluctuation is ``phi1' = -a Omega cos(Omega tau)`` with ``a Omega = W``):
+  ``<f> = (1/pi) int_0^pi f(v + W cos phi) dphi``. The integrands have a kink at
+  ``u = 0`` (``|u|``), i.e. at ``phi0 = arccos(-v/W)`` when ``|v| < W``; the interval
+  is split there and each smooth piece gets an ``n``-point Gauss-Legendre rule, so the
+  error falls faster than any power of ``n`` (shown in tests/analysis/test_quadrature.py
+  and scripts/bench_analysis.py). Default ``n`` = :data:`N_QUAD`.
+
+The kernel accumulates the averages of all integrands of
+:func:`engine.analysis.integrands.abc` in one pass.
+"""
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .integrands import abc
+
+SQUARE = 0
+SINE = 1
+#: Rule per dither kind. ``none`` is the square rule with W = 0 (both points at v).
+RULES = {"none": SQUARE, "square-velocity": SQUARE, "sine-velocity": SINE, "sine-force": SINE}
+#: Gauss-Legendre points per smooth piece of the sine rule (see the module docstring).
+N_QUAD = 64
+#: Number of averaged integrands returned by :func:`phase_average` (a, b, c, s and slopes).
+N_AVG = 8
+A, B, C, S, DA, DB, DC, DS = range(N_AVG)
+
+
+def rule_code(dither: str) -> int:
+    """Quadrature rule for a dither kind (engine.dither.KINDS)."""
+    try:
+        return RULES[dither]
+    except KeyError:
+        raise ValueError(f"dither must be one of {tuple(RULES)}, got {dither!r}") from None
+
+
+def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre nodes and weights on [-1, 1] (``n >= 1`` points)."""
+    if n < 1:
+        raise ValueError(f"n_quad must be >= 1, got {n}")
+    return np.polynomial.legendre.leggauss(int(n))
+
+
+@njit(cache=True, error_model="numpy")
+def _add(out, u, w, q, side):
+    r = abc(u, q[0], q[1], q[2], q[3], q[4], q[5], q[6], side)
+    for i in range(8):
+        out[i] += w * r[i]
+
+
+@njit(cache=True, error_model="numpy")
+def _add_piece(out, v, W, lo, hi, x, wx, q, side):
+    """Add (1/pi) int_lo^hi f(v + W cos phi) dphi by Gauss-Legendre."""
+    half = 0.5 * (hi - lo)
+    mid = 0.5 * (hi + lo)
+    for k in range(x.size):
+        _add(out, v + W * np.cos(mid + half * x[k]), half * wx[k] / np.pi, q, side)
+
+
+@njit(cache=True, error_model="numpy")
+def phase_average(out, v, W, rule, x, wx, q, side):
+    """Write the phase averages of a, b, c, s, a', b', c', s' into ``out[:8]``.
+
+    Parameters
+    ----------
+    out : (8,) float64
+        Output, indexed by :data:`A`, :data:`B`, ... :data:`DS`.
+    v, W : float
+        Slow velocity and dither velocity amplitude (the sign of W is irrelevant).
+    rule : int
+        :data:`SQUARE` or :data:`SINE`.
+    x, wx : (n,) float64
+        Gauss-Legendre nodes/weights on [-1, 1] (sine rule only).
+    q : (7,) float64
+        ``fc, fs, vs, delta, sigma1_hat, vd, delta_d``.
+    side : float
+        sgn(0) for slopes at a kink, +1 or -1 (integrands module).
+    """
+    out[:] = 0.0
+    Wa = abs(W)
+    if rule == SQUARE:
+        _add(out, v + Wa, 0.5, q, side)
+        _add(out, v - Wa, 0.5, q, side)
+    elif Wa > abs(v):
+        phi0 = np.arccos(-v / Wa)  # u(phi0) = 0: the kink of |u|
+        _add_piece(out, v, Wa, 0.0, phi0, x, wx, q, side)
+        _add_piece(out, v, Wa, phi0, np.pi, x, wx, q, side)
+    else:
+        _add_piece(out, v, Wa, 0.0, np.pi, x, wx, q, side)
