@@ -46,7 +46,10 @@ def resolve_sweep(root: Path, key: str) -> tuple[str, Path]:
     """A sweep id, id prefix or name -> (sweep id, cube path)."""
     import store
 
-    row = store.Catalogue(root).find(key)
+    try:
+        row = store.Catalogue(root).find(key)
+    except LookupError as exc:  # an ambiguous id prefix
+        raise UserError(str(exc)) from None
     if row is None:
         raise UserError(f"no sweep {key!r} in store {root} (see `ditherlab status`)")
     cube = store.SweepDir(root, row["sweep_id"]).cube
@@ -79,9 +82,8 @@ def cmd_status(args) -> int:
 
     cat = store.Catalogue(store_root(args.store))
     if args.sweep:
-        row = cat.find(args.sweep)
-        if row is None:
-            raise UserError(f"no sweep {args.sweep!r} in store {store_root(args.store)}")
+        sweep_id, _ = resolve_sweep(store_root(args.store), args.sweep)
+        row = cat.get(sweep_id)
         for key, value in row.items():
             if key != "spec_json":
                 print(f"{key:>14}: {value}")

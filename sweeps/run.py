@@ -10,7 +10,6 @@ the blocks missing from the journal.
 from __future__ import annotations
 
 import logging
-import os
 import time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -118,54 +117,81 @@ def cube_attrs(plan: Plan) -> dict:
 
 
 def empty_cube(plan: Plan):
+    """A cube with every point NOT_COMPUTED, the coordinates, variables and attributes of
+    ``plan``."""
     variables = {name: output_attrs(plan.path, name) for name in plan.outputs}
     units = {"omega": "rad/s", "W": "m/s", "v_ref": "m/s", "v_d": "m/s"} \
         if plan.spec.system == "contact" else None
     return store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units)
 
 
-def _flat_payload(plan: Plan, block: int, result: dict) -> dict:
-    return {"index": plan.blocks[block], **{k: v for k, v in result.items() if k != "error"}}
-
-
 # --- submit ----------------------------------------------------------------------------
+
+def blocks_to_run(plan: Plan, cube) -> list[int]:
+    """Blocks with a point whose status is not OK: never computed, or failed before
+    (DESIGN.md §4: a resubmitted spec computes only the points whose status is not 0)."""
+    status = cube["status"].values.ravel()
+    return [b for b, index in enumerate(plan.blocks) if np.any(status[index] != S.OK)]
+
 
 def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
            workers: int = 2, progress: bool = True, max_blocks: int | None = None
            ) -> SubmitResult:
-    """Run every block of ``plan`` missing from its journal; publish the cube.
+    """Run every block of ``plan`` not yet finished OK; publish the cube.
 
     ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
     """
     t0 = time.perf_counter()
     sweep = store.SweepDir(store_root, plan.sweep_id)
-    catalogue = store.Catalogue(store_root)
     journal = store.Journal(sweep.journal)
-    missing = [b for b in range(len(plan.blocks)) if b not in journal.done()]
-    if not missing and sweep.cube.exists():
-        return _finish(plan, sweep, catalogue, journal, blocks_run=0, t0=t0, publish=False)
+    cube = store.rebuild(empty_cube(plan), journal)  # what earlier runs finished
+    todo = blocks_to_run(plan, cube)
+    catalogue = store.Catalogue(store_root)
+    if not todo and sweep.cube.exists():
+        return _result(plan, sweep, catalogue, cube, blocks_run=0, t0=t0, timings={})
     sweep.root.mkdir(parents=True, exist_ok=True)
     sweep.write_spec(plan.spec.to_json())
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
-                       len(plan.blocks), str(sweep.root))
+                       len(plan.blocks), sweep.root)
     catalogue.update(plan.sweep_id, state="running")
-    _publish(plan, sweep, journal)  # a valid cube exists from the first instant
-    if max_blocks is not None:
-        missing = missing[:max_blocks]
-    run = _run_blocks_local if plan.path != "simulate" and scheduler is None else _run_blocks
+    store.publish(cube, sweep.cube)  # a valid cube exists from the first instant
+    todo = todo[:max_blocks] if max_blocks is not None else todo
+    sink = BlockSink(plan, cube, journal, sweep, catalogue)
     timings: dict = {}
-    n_run = run(plan, missing, journal, sweep, scheduler=scheduler, workers=workers,
-                progress=progress, timings=timings)
-    res = _finish(plan, sweep, catalogue, journal, blocks_run=n_run, t0=t0, publish=True)
-    res.timings = timings
-    return res
+    run = _run_blocks_local if plan.path != "simulate" and scheduler is None else _run_blocks
+    run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
+        timings=timings)
+    store.publish(cube, sweep.cube)
+    return _result(plan, sweep, catalogue, cube, blocks_run=len(todo), t0=t0, timings=timings)
 
 
-def _run_blocks(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
-                progress, timings) -> int:
+class BlockSink:
+    """Receives finished blocks in the submitting process: journal first (durable), then
+    the in-memory cube, republished atomically every PUBLISH_EVERY_S seconds."""
+
+    def __init__(self, plan: Plan, cube, journal, sweep, catalogue):
+        self.plan, self.cube, self.journal = plan, cube, journal
+        self.sweep, self.catalogue = sweep, catalogue
+        self.last_publish = time.monotonic()
+
+    def __call__(self, b: int, result: dict) -> None:
+        if "error" in result:
+            log.warning("block %d failed: %s", b, result["error"])
+        payload = {"index": self.plan.blocks[b],
+                   **{k: v for k, v in result.items() if k != "error"}}
+        self.journal.write(b, payload)
+        store.fill_block(self.cube, payload)
+        if time.monotonic() - self.last_publish > PUBLISH_EVERY_S:
+            store.publish(self.cube, self.sweep.cube)
+            self.catalogue.update(self.plan.sweep_id, **_counts(self.cube))
+            self.last_publish = time.monotonic()
+
+
+def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
+                progress, timings) -> None:
     from distributed import as_completed
 
-    bar = _progress_bar(plan, len(missing), progress)
+    bar = _progress_bar(plan, len(todo), progress)
     t = time.perf_counter()
     with dask_client(scheduler, workers) as client:
         timings["cluster_s"] = time.perf_counter() - t
@@ -174,40 +200,26 @@ def _run_blocks(plan: Plan, missing: list[int], journal, sweep, *, scheduler, wo
         timings["warm_up_s"] = time.perf_counter() - t
         t = time.perf_counter()
         futures = {client.submit(compute_block, plan.scene, plan.block_points(b), plan.params,
-                                 plan.numerics.settings, pure=False, key=f"block-{b}-{plan.sweep_id}"): b
-                   for b in missing}
-        last = time.monotonic()
+                                 plan.numerics.settings, pure=False): b for b in todo}
         for future in as_completed(futures):
-            b = futures[future]
-            _journal_block(plan, b, future.result(), journal)
+            sink(futures[future], future.result())
             bar.update(1)
-            if time.monotonic() - last > PUBLISH_EVERY_S:
-                _publish(plan, sweep, journal)
-                last = time.monotonic()
         timings["compute_s"] = time.perf_counter() - t
     bar.close()
-    return len(missing)
 
 
-def _run_blocks_local(plan: Plan, missing: list[int], journal, sweep, *, scheduler, workers,
-                      progress, timings) -> int:
+def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
+                      progress, timings) -> None:
     """The analysis paths cost microseconds per point: starting a cluster would cost
     more than the whole sweep, so they run in this process."""
-    bar = _progress_bar(plan, len(missing), progress)
+    bar = _progress_bar(plan, len(todo), progress)
     t = time.perf_counter()
-    for b in missing:
-        _journal_block(plan, b, compute_block(plan.scene, plan.block_points(b), plan.params,
-                                              plan.numerics.settings), journal)
+    for b in todo:
+        sink(b, compute_block(plan.scene, plan.block_points(b), plan.params,
+                              plan.numerics.settings))
         bar.update(1)
     timings["compute_s"] = time.perf_counter() - t
     bar.close()
-    return len(missing)
-
-
-def _journal_block(plan: Plan, b: int, result: dict, journal) -> None:
-    if "error" in result:
-        log.warning("block %d failed: %s", b, result["error"])
-    journal.write(b, _flat_payload(plan, b, result))
 
 
 def _progress_bar(plan: Plan, n: int, enabled: bool):
@@ -217,22 +229,22 @@ def _progress_bar(plan: Plan, n: int, enabled: bool):
                 disable=not enabled, mininterval=0.5)
 
 
-def _publish(plan: Plan, sweep, journal):
-    ds = store.rebuild(empty_cube(plan), journal)
-    store.publish(ds, sweep.cube)
-    return ds
-
-
-def _finish(plan, sweep, catalogue, journal, *, blocks_run, t0, publish) -> SubmitResult:
-    ds = _publish(plan, sweep, journal) if publish else store.open_cube(sweep.cube)
-    status = ds["status"].values
+def _counts(cube) -> dict:
+    status = cube["status"].values
     n_ok = int((status == S.OK).sum())
     n_missing = int((status == S.NOT_COMPUTED).sum())
     n_failed = int(status.size - n_ok - n_missing)
-    state = "partial" if n_missing else "done"
-    catalogue.update(plan.sweep_id, state=state, done_points=n_ok + n_failed,
-                     failed_points=n_failed)
-    done = journal.done()
-    return SubmitResult(plan.sweep_id, sweep.cube, state, status.size, n_ok, n_failed,
-                        blocks_run, len(plan.blocks) if not done else len(plan.blocks),
-                        time.perf_counter() - t0)
+    return {"done_points": n_ok + n_failed, "failed_points": n_failed}
+
+
+def _result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings) -> SubmitResult:
+    counts = _counts(cube)
+    n = cube["status"].size
+    if counts["done_points"] < n:
+        state = "partial"
+    else:
+        state = "failed" if counts["failed_points"] else "done"
+    catalogue.update(plan.sweep_id, state=state, **counts)
+    n_ok = counts["done_points"] - counts["failed_points"]
+    return SubmitResult(plan.sweep_id, sweep.cube, state, n, n_ok, counts["failed_points"],
+                        blocks_run, len(plan.blocks), time.perf_counter() - t0, timings)
