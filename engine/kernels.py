@@ -65,7 +65,7 @@ def point_kernel(scene, record: bool = False) -> PointKernel:
     solve = make_solve(stepper, observer, scene.dither)
     init, obs_init, finish = system.init, observer.init, observer.finish
 
-    @njit
+    @njit(error_model="numpy")
     def run_point(p, cfg, work, y, obs, out, ctr, rec):
         init(p, y)
         obs_init(obs)
@@ -96,7 +96,7 @@ def block_kernel(scene) -> Callable:
     alloc, run_point = pk.alloc, pk.run_point
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 
-    @njit
+    @njit(error_model="numpy")
     def run(points, p, cfg, out, status, counters):
         q = p.copy()
         y, obs, o = np.empty(n), np.empty(size), np.empty(k)

@@ -77,7 +77,7 @@ def _make_attempt(tab, n, n_err, rhs):
     c2, c3, c4, c5 = c[1], c[2], c[3], c[4]
     e1, e3, e4, e5, e6, e7 = e[0], e[2], e[3], e[4], e[5], e[6]
 
-    @njit
+    @njit(error_model="numpy")
     def attempt(t, hh, y, p, sq, K, yt, yn, rtol, atol):
         k1, k2, k3, k4, k5, k6, k7 = K[0], K[1], K[2], K[3], K[4], K[5], K[6]
         for i in range(n):
@@ -116,7 +116,7 @@ def _make_dense(tab, n):
     rows = tuple(tuple(float(x) for x in P[:, j]) for j in range(P.shape[1]))
     d0, d1, d2, d3 = rows
 
-    @njit
+    @njit(error_model="numpy")
     def coeffs(K, Q):
         for i in range(n):
             Q[0, i] = (d0[0] * K[0, i] + d0[2] * K[2, i] + d0[3] * K[3, i] + d0[4] * K[4, i]
@@ -128,7 +128,7 @@ def _make_dense(tab, n):
             Q[3, i] = (d3[0] * K[0, i] + d3[2] * K[2, i] + d3[3] * K[3, i] + d3[4] * K[4, i]
                        + d3[5] * K[5, i] + d3[6] * K[6, i])
 
-    @njit
+    @njit(error_model="numpy")
     def dense_eval(y, hh, Q, th, out):
         for i in range(n):
             out[i] = y[i] + hh * th * (Q[0, i] + th * (Q[1, i] + th * (Q[2, i] + th * Q[3, i])))
@@ -136,7 +136,16 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit
+@njit(error_model="numpy")
+def _sign_change(g0, g1, m):
+    """True if any of the first m event functions changed sign (a zero is no change)."""
+    for i in range(m):
+        if g0[i] * g1[i] < 0.0:
+            return True
+    return False
+
+
+@njit(error_model="numpy")
 def _factor(err, reject_prev):
     """I-controller step factor for error ``err`` (non-finite -> FAC_MIN)."""
     if not math.isfinite(err):
@@ -150,7 +159,7 @@ def _factor(err, reject_prev):
 def _make_initial_step(n, n_err, rhs, order):
     """njit ``h0(t, y, f0, p, sq, y1, f1, rtol, atol, t_span) -> h`` (Hairer-Norsett-Wanner I,
     II.4 "starting step size"; one extra evaluation)."""
-    @njit
+    @njit(error_model="numpy")
     def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
         d0 = d1 = 0.0
         for i in range(n_err):
@@ -186,14 +195,14 @@ def make_stepper(problem) -> Stepper:
     locate = make_locator(events, n_ev, dense_eval)
     n_g = max(n_ev, 1)
 
-    @njit
+    @njit(error_model="numpy")
     def alloc():
         # K: stages k1..k7; Y: yt, yn, ymid, ytmp; Q: dense coefficients;
         # G: event values at step start / end / scratch; state: h, reject flag
         return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((3, n_g)),
                 np.zeros(2))
 
-    @njit
+    @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         K, Y, Q, G, state = work
         yt, yn, ym, ytmp = Y[0], Y[1], Y[2], Y[3]
@@ -227,8 +236,10 @@ def make_stepper(problem) -> Stepper:
             h_next = hh * _factor(err, state[W_REJ] != 0.0)
             if n_ev:
                 events(t + hh, yn, p, sq, G[1])
-                coeffs(K, Q)
-                th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
+                th, idx = 2.0, -1
+                if _sign_change(G[0], G[1], n_ev):
+                    coeffs(K, Q)
+                    th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
                 if EVENT_MARGIN < th < 1.0 - EVENT_MARGIN:
                     # retake the step so that it ends on the kink
                     ctr[CTR_REJECTED] += 1

@@ -20,7 +20,7 @@ def make_locator(events, n_events, dense_eval):
     ``g0``/``g1``: event values at theta = 0 / 1; ``dense_eval(y, hh, Q, theta, out)`` writes
     the dense state at theta. Returns ``(2.0, -1)`` when no event changes sign.
     """
-    @njit
+    @njit(error_model="numpy")
     def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp):
         best, idx = 2.0, -1
         for i in range(n_events):
@@ -30,7 +30,7 @@ def make_locator(events, n_events, dense_eval):
                     best, idx = th, i
         return best, idx
 
-    @njit
+    @njit(error_model="numpy")
     def _illinois(i, t, hh, y, Q, p, sq, fa, fb, ytmp, gtmp):
         a, b = 0.0, 1.0
         side = 0

@@ -53,7 +53,7 @@ class Stepper(NamedTuple):
     extra: Any = None      # method-specific helpers (e.g. dense output), optional
 
 
-@njit
+@njit(error_model="numpy")
 def record_step(rec, ctr, cfg, t, y):
     """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec`` (shape ``(capacity, 1 + n)``)
     for every ``cfg[CFG_RECORD_EVERY]``-th accepted step; call after counting the step.

@@ -48,11 +48,11 @@ def make_stepper(problem) -> Stepper:
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
     m1, m2, m3, m4 = _mid_weights(TABLEAU)
 
-    @njit
+    @njit(error_model="numpy")
     def alloc():
         return np.empty((7, n))
 
-    @njit
+    @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         k1, k2, k3, k4, yt, y0, ym = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
         m = max(1, int(math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12))))

@@ -32,11 +32,11 @@ from ..friction.stribeck import _decay
 def make_g(stribeck: bool):
     """njit ``g(u, p)``, Eq. 2.4 (``fc`` alone when the scene has no Stribeck effect)."""
     if stribeck:
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def g(u, p):
             return p[P.FC] + (p[P.FS] - p[P.FC]) * _decay(u / p[P.VS], p[P.DELTA])
     else:
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def g(u, p):
             return p[P.FC]
     return g
@@ -45,11 +45,11 @@ def make_g(stribeck: bool):
 def make_damping(bristle_damping: bool):
     """njit ``sigma1(u, p)``, Eq. 2.5 (0 when the scene has no bristle damping)."""
     if bristle_damping:
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def sigma1(u, p):
             return p[P.SIGMA1] * _decay(u / p[P.VD], p[P.DELTA_D])
     else:
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def sigma1(u, p):
             return 0.0
     return sigma1
@@ -69,7 +69,7 @@ def _bristle_law(scene):
     damping = scene.bristle_damping
     elasto = scene.friction == "elastoplastic"
 
-    @njit(inline="always")
+    @njit(inline="always", error_model="numpy")
     def law(u, z, hold, p):
         sigma0 = p[P.SIGMA0]
         gu = g(u, p)
@@ -93,7 +93,7 @@ def _static_law(scene):
     g = make_g(stribeck)
     viscous = scene.viscous
 
-    @njit(inline="always")
+    @njit(inline="always", error_model="numpy")
     def law(u, z, hold, p):
         if abs(u) < p[P.STICK_BAND]:
             fb = p[P.FS] if stribeck else p[P.FC]
@@ -115,14 +115,14 @@ def make_kinks(scene):
       (breakaway, inside the band only; +1 outside).
     """
     if scene.friction == "lugre":
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def kinks(u, z, hold, p, out):
             out[0] = u
         return 1, kinks
     if scene.friction == "elastoplastic":
         gfun = make_g(scene.stribeck)
 
-        @njit(inline="always")
+        @njit(inline="always", error_model="numpy")
         def kinks(u, z, hold, p, out):
             zss = gfun(u, p) / p[P.SIGMA0]
             out[0] = u
@@ -131,7 +131,7 @@ def make_kinks(scene):
         return 3, kinks
     stribeck = scene.friction == "stribeck" and scene.stribeck
 
-    @njit(inline="always")
+    @njit(inline="always", error_model="numpy")
     def kinks(u, z, hold, p, out):
         band = p[P.STICK_BAND]
         out[0] = u - band
