@@ -91,7 +91,7 @@ def _make_attempt(tab, n, n_err, rhs):
     A, C, c, d = tab.a.copy(), tab.C.copy(), tab.c.copy(), tab.d.copy()
     m, me = tab.m.copy(), tab.m_err.copy()
 
-    @njit
+    @njit(error_model="numpy")
     def attempt(t, hh, y, f0, ft, tdep, LU, piv, p, sq, U, yt, yn, rtol, atol):
         for i in range(s):
             r = U[i]
@@ -133,7 +133,7 @@ def _make_dense(tab, n):
     D = tab.dense.copy()
     s = tab.stages
 
-    @njit
+    @njit(error_model="numpy")
     def coeffs(y, yn, U, Q):
         for k in range(n):
             q1 = q2 = 0.0
@@ -142,7 +142,7 @@ def _make_dense(tab, n):
                 q2 += D[1, i] * U[i, k]
             Q[0, k], Q[1, k], Q[2, k] = yn[k] - y[k], q1, q2
 
-    @njit
+    @njit(error_model="numpy")
     def dense_eval(y, hh, Q, th, out):
         for k in range(n):
             out[k] = y[k] + th * (Q[0, k] + (1.0 - th) * (Q[1, k] + th * Q[2, k]))
@@ -150,7 +150,7 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit
+@njit(error_model="numpy")
 def _fac(err):
     """Step divisor for error ``err`` (non-finite -> the largest cut)."""
     if not math.isfinite(err):
@@ -158,7 +158,7 @@ def _fac(err):
     return min(FAC_HI, max(FAC_LO, err ** 0.25 / SAFETY))
 
 
-@njit
+@njit(error_model="numpy")
 def _accept_fac(err, hh, state):
     """Gustafsson predictive divisor after an accepted step (updates the controller memory)."""
     fac = _fac(err)
@@ -175,7 +175,7 @@ def _accept_fac(err, hh, state):
 def _make_initial_step(n, n_err, rhs, order):
     """njit ``h0(t, y, f0, p, sq, y1, f1, rtol, atol, t_span) -> h`` (Hairer-Norsett-Wanner I,
     II.4 "starting step size"; one evaluation)."""
-    @njit
+    @njit(error_model="numpy")
     def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
         d0 = d1 = 0.0
         for i in range(n_err):
@@ -215,14 +215,14 @@ def make_stepper(problem) -> Stepper:
     locate = make_locator(events, n_ev, dense_eval)
     n_g = max(n_ev, 1)
 
-    @njit
+    @njit(error_model="numpy")
     def alloc():
         # U: stages; Y: yt, yn, ym, ytmp, f0, ft; Q: dense coefficients; G: event values at
         # step start / end / scratch; J, LU: Jacobian and factors; state: W_* slots
         return (np.zeros((s, n)), np.zeros((6, n)), np.zeros((3, n)), np.zeros((3, n_g)),
                 np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, np.int64), np.zeros(5))
 
-    @njit
+    @njit(error_model="numpy")
     def factor(J, LU, piv, hh):
         for i in range(n):
             for j in range(n):
@@ -230,7 +230,7 @@ def make_stepper(problem) -> Stepper:
             LU[i, i] += 1.0 / (hh * gamma)
         return lu_factor(LU, piv)
 
-    @njit
+    @njit(error_model="numpy")
     def restart(t0, t1, y, p, sq, fresh, work, rtol, atol):
         """Events at t0; at the first segment of a point or after a switch a new h."""
         U, Y, Q, G, J, LU, piv, state = work
@@ -248,7 +248,7 @@ def make_stepper(problem) -> Stepper:
         state[W_HOLD] = 0.0
         return 3 if fresh == FRESH_START else 2
 
-    @njit
+    @njit(error_model="numpy")
     def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
         """Factor and attempt one step of size hh from (t, y); err (inf if singular)."""
         U, Y, Q, G, J, LU, piv, state = work
@@ -258,7 +258,7 @@ def make_stepper(problem) -> Stepper:
         return attempt(t, hh, y, Y[4], Y[5], state[W_TDEP] != 0.0, LU, piv, p, sq, U, Y[0],
                        Y[1], rtol, atol)
 
-    @njit
+    @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         U, Y, Q, G, J, LU, piv, state = work
         yn, ym, ytmp, f0, ft = Y[1], Y[2], Y[3], Y[4], Y[5]

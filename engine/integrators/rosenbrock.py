@@ -144,7 +144,7 @@ class RosenbrockTableau:
 
 
 # --------------------------------------------------------------------------- kernels
-@njit
+@njit(error_model="numpy")
 def lu_factor(M, piv):
     """In-place LU decomposition with partial pivoting of a small dense ``M``.
 
@@ -170,7 +170,7 @@ def lu_factor(M, piv):
     return True
 
 
-@njit
+@njit(error_model="numpy")
 def lu_solve(M, piv, b):
     """Solve ``M x = b`` in place (``b`` becomes ``x``) with the factors of :func:`lu_factor`."""
     n = M.shape[0]
@@ -197,7 +197,7 @@ def make_fd_jacobian(n, n_err, rhs):
     below which ``y_j`` is negligible, e.g. ``atol / rtol``); the other columns (quadrature
     states, which nothing depends on) are zero. ``f0 = f(t, y)``; ``n_err`` evaluations.
     """
-    @njit
+    @njit(error_model="numpy")
     def jac(t, y, f0, p, sq, J, yt, ft, floor):
         for k in range(n):
             yt[k] = y[k]
@@ -224,7 +224,7 @@ def make_time_derivative(n, rhs):
     """
     eps = float(np.finfo(float).eps)
 
-    @njit
+    @njit(error_model="numpy")
     def dfdt(t, y, f0, p, sq, hh, ft, yt):
         t2 = t + max(SQRT_EPS * hh, 64.0 * eps * abs(t))
         delta = t2 - t
