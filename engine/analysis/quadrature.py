@@ -17,6 +17,8 @@ The kernel accumulates the averages of all integrands of
 """
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numba import njit
 
@@ -41,11 +43,15 @@ def rule_code(dither: str) -> int:
         raise ValueError(f"dither must be one of {tuple(RULES)}, got {dither!r}") from None
 
 
+@lru_cache(maxsize=16)
 def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights on [-1, 1] (``n >= 1`` points)."""
+    """Gauss-Legendre nodes and weights on [-1, 1] (``n >= 1`` points; cached, read-only)."""
     if n < 1:
         raise ValueError(f"n_quad must be >= 1, got {n}")
-    return np.polynomial.legendre.leggauss(int(n))
+    x, w = np.polynomial.legendre.leggauss(int(n))
+    x.flags.writeable = False
+    w.flags.writeable = False
+    return x, w
 
 
 @njit(cache=True, error_model="numpy")
