@@ -103,14 +103,20 @@ def _coefficients(f_samples: np.ndarray, m_max: int) -> np.ndarray:
     return c[np.arange(-m_max, m_max + 1) % f_samples.size]
 
 
-def _solve(H, v_m, v_a, omega, p):
-    """z coefficients c_{-H..H} of the Galerkin system (module docstring)."""
+def galerkin_terms(H, v_m, v_a, p):
+    """Two-sided Fourier coefficients ``G_m, K_m`` (``|m| <= 2H``) of ``g(u(t))`` and
+    ``sigma0 |u(t)|`` and ``R_k`` (``|k| <= H``) of ``u g(u)``, by FFT on ``max(8H, 256)``
+    samples. For ``v_a <= v_m``, ``2 Re R_n`` are the paper's ``Q_n`` (Eq. A.4)."""
     M = max(8 * H, 256)
     u = v_m + v_a * np.cos(2 * np.pi * np.arange(M) / M)
     gu = _g(u, p[P.FC], p[P.FS], p[P.VS], p[P.DELTA])
-    G = _coefficients(gu, 2 * H)
-    K = _coefficients(p[P.SIGMA0] * np.abs(u), 2 * H)
-    R = _coefficients(u * gu, H)
+    return (_coefficients(gu, 2 * H), _coefficients(p[P.SIGMA0] * np.abs(u), 2 * H),
+            _coefficients(u * gu, H))
+
+
+def _solve(H, v_m, v_a, omega, p):
+    """z coefficients c_{-H..H} of the Galerkin system (module docstring)."""
+    G, K, R = galerkin_terms(H, v_m, v_a, p)
     n = np.arange(-H, H + 1)
     diff = (n[:, None] - n[None, :]) + 2 * H        # index of m = k - n in G, K
     Amat = 1j * omega * n[None, :] * G[diff] + K[diff]
