@@ -32,8 +32,13 @@ def best(fn, repeat=REPEAT):
 def main():
     t0 = time.perf_counter()
     from engine import params as P
-    from engine.analysis import (contact_hbm, effective_friction, jacobian, max_real_eig,
-                                 stability_chart)
+    from engine.analysis import (
+        contact_hbm,
+        effective_friction,
+        jacobian,
+        max_real_eig,
+        stability_chart,
+    )
     t_import = time.perf_counter() - t0
     p = P.pack()
     x = np.random.default_rng(0).random(1_000_000)
@@ -84,7 +89,7 @@ def main():
     pc = P.pack(P.CONTACT_DEFAULTS)
     for v_a, w in [(1e-3, 1.0), (1e-3, 100.0), (1e-3, 1e4), (2e-3, 100.0)]:
         r = contact_hbm(1e-3, v_a, w, pc, rtol=1e-6)
-        t = best(lambda: contact_hbm(1e-3, v_a, w, pc, rtol=1e-6), 3)
+        t = best(lambda v_a=v_a, w=w: contact_hbm(1e-3, v_a, w, pc, rtol=1e-6), 3)
         print(f"v_a={v_a:.0e} omega={w:8.0f}: H={r.H:5d} change={r.change:.1e}  {t * 1e3:8.1f} ms")
 
 

@@ -17,11 +17,11 @@ import os
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from engine import params as P  # noqa: E402
-from engine.analysis import contact_hbm, effective_friction  # noqa: E402
+from engine import params as P
+from engine.analysis import contact_hbm
 
 VM = VA = 1e-3
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")

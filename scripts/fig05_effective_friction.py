@@ -16,12 +16,12 @@ import os
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from engine import params as P  # noqa: E402
-from engine.analysis import effective_friction, negative_slope_zones  # noqa: E402
-from engine.friction.stribeck import g  # noqa: E402
+from engine import params as P
+from engine.analysis import effective_friction, negative_slope_zones
+from engine.friction.stribeck import g
 
 WS = (0.25, 0.5, 1.0)
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")
@@ -31,7 +31,7 @@ def report_zones():
     v = np.linspace(0.0, 2.0, 200001)
     for vd in (0.1, 0.01):
         for W in (0.0,) + WS:
-            F, dF = effective_friction(v, W, P.pack(vd=vd), slope=True)
+            _F, dF = effective_friction(v, W, P.pack(vd=vd), slope=True)
             zones = negative_slope_zones(v, dF)
             txt = ", ".join(f"[{a:.5f}, {b:.5f}] (min slope {dF[(v >= a) & (v <= b)].min():.3f})"
                             for a, b in zones)
@@ -52,9 +52,9 @@ def report_slopes():
 def plot():
     v = np.linspace(-1.5, 1.5, 3001)
     fig, ax = plt.subplots(2, 2, figsize=(10, 8), sharex=True)
-    for k, (title, kw) in enumerate([("(a) LuGre, vd = 0.1", dict(vd=0.1)),
-                                     ("(b) LuGre, vd = 0.01; o Eq. 5.12", dict(vd=0.01)),
-                                     ("(c) static model, Eq. 5.14", dict(model="static"))]):
+    for k, (title, kw) in enumerate([("(a) LuGre, vd = 0.1", {"vd": 0.1}),
+                                     ("(b) LuGre, vd = 0.01; o Eq. 5.12", {"vd": 0.01}),
+                                     ("(c) static model, Eq. 5.14", {"model": "static"})]):
         a = ax.flat[k]
         for W in WS:
             a.plot(v, effective_friction(v, W, P.pack(), **kw), label=f"W = {W}")

@@ -15,11 +15,11 @@ import os
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from engine import params as P  # noqa: E402
-from engine.analysis import effective_friction, sine_force_simplified  # noqa: E402
+from engine import params as P
+from engine.analysis import effective_friction, sine_force_simplified
 
 A_OMEGA = (0.5, 0.75)
 FC, FS, S2 = 1.0, 1.5, 0.004

@@ -17,13 +17,13 @@ import os
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.colors import ListedColormap  # noqa: E402
-from scipy.optimize import brentq  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.colors import ListedColormap
+from scipy.optimize import brentq
 
-from engine import params as P  # noqa: E402
-from engine.analysis import PU, SU, jacobian, max_real_eig, stability_chart  # noqa: E402
+from engine import params as P
+from engine.analysis import PU, SU, jacobian, max_real_eig, stability_chart
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")
 CMAP = ListedColormap(["#dddddd", "white", "#d62728", "#1f77b4"])   # unknown, stable, PU, SU

@@ -5,8 +5,14 @@ from .chart import LABELS, PU, STABLE, SU, UNKNOWN, stability_chart, stability_l
 from .effective import MODELS, effective_friction, negative_slope_zones, sine_force_simplified
 from .hbm import HBMResult, contact_hbm
 from .quadrature import N_QUAD, RULES, gauss_legendre, phase_average
-from .stability import (averaged_rhs, averages, equilibrium, jacobian, max_real_eig,
-                        static_max_real_eig)
+from .stability import (
+    averaged_rhs,
+    averages,
+    equilibrium,
+    jacobian,
+    max_real_eig,
+    static_max_real_eig,
+)
 
 __all__ = [
     "LABELS", "MODELS", "N_QUAD", "POINT_AXES", "PU", "RULES", "STABLE", "SU", "UNKNOWN",

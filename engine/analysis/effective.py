@@ -25,8 +25,21 @@ import numpy as np
 from numba import njit
 
 from .. import params as P
-from .quadrature import (A, B, C, DA, DB, DC, DS, N_AVG, N_QUAD, S, gauss_legendre,
-                         phase_average, rule_code)
+from .quadrature import (
+    DA,
+    DB,
+    DC,
+    DS,
+    N_AVG,
+    N_QUAD,
+    A,
+    B,
+    C,
+    S,
+    gauss_legendre,
+    phase_average,
+    rule_code,
+)
 
 LUGRE, NO_DAMPING, STATIC = 0, 1, 2
 MODELS = {"lugre": LUGRE, "no-damping": NO_DAMPING, "static": STATIC}

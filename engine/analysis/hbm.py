@@ -180,6 +180,6 @@ def contact_hbm(v_m, v_a, omega, p, *, H0=8, H_max=1024, rtol=1e-9, atol=0.0,
 
 def _result(t, u, z, F, H, change, status):
     n = F.size
-    one_sided = lambda x: np.fft.rfft(x) / n * np.r_[1.0, 2.0 * np.ones(n // 2)]  # noqa: E731
+    one_sided = lambda x: np.fft.rfft(x) / n * np.r_[1.0, 2.0 * np.ones(n // 2)]
     return HBMResult(t=t, u=u, z=z, F=F, z_coef=one_sided(z), F_coef=one_sided(F),
                      H=H, change=change, status=status)

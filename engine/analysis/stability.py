@@ -34,7 +34,7 @@ from numba import njit
 
 from .. import params as P
 from .effective import LUGRE, force_and_slope, law_vector
-from .quadrature import A, B, C, DA, DB, DC, N_AVG, N_QUAD, gauss_legendre, phase_average, rule_code
+from .quadrature import DA, DB, DC, N_AVG, N_QUAD, A, B, C, gauss_legendre, phase_average, rule_code
 
 
 @njit(cache=True, error_model="numpy")

@@ -4,10 +4,13 @@ import numpy as np
 import pytest
 
 from engine import params as P
-from engine.analysis.effective import (effective_friction, negative_slope_zones,
-                                       sine_force_simplified)
-from engine.friction.stribeck import g, sigma1
+from engine.analysis.effective import (
+    effective_friction,
+    negative_slope_zones,
+    sine_force_simplified,
+)
 from engine.analysis.integrands import dsigma1
+from engine.friction.stribeck import g
 
 PAPER = P.pack()                       # Sec. 5.1 set, vd = 0.1
 FC, FS, VS, S1, S2 = 1.0, 1.5, 0.1, 10.0, 0.004
@@ -66,7 +69,7 @@ def test_eq_5_21_low_velocity_slope_of_sine_force_dither(W):
     simple = P.pack(fs=FC, sigma1=0.0)
     expected = np.pi * FC / (2 * W) + S2
     assert _fd_slope(lambda v: sine_force_simplified(v, W, FC, S2), 0.0) == pytest.approx(expected, rel=1e-8)
-    F, dF = effective_friction(0.0, W, simple, dither="sine-force", slope=True)
+    _F, dF = effective_friction(0.0, W, simple, dither="sine-force", slope=True)
     assert dF == pytest.approx(expected, rel=1e-12)
 
 
@@ -88,7 +91,7 @@ def test_lugre_square_low_velocity_slope(vd):
     """Slope of Eq. 5.9 at v = 0 (Y(0) = 0, Y'(0) = g(W)/W):
     g(W)/W (1 - C) + B' + sigma2 = g(W)/W + sigma1'(W) W + sigma2."""
     W = 0.5
-    F, dF = effective_friction(0.0, W, P.pack(vd=vd), slope=True)
+    _F, dF = effective_friction(0.0, W, P.pack(vd=vd), slope=True)
     expected = g(W, FC, FS, VS, 2.0) / W + dsigma1(W, S1, vd, 2.0, 1.0) * W + S2
     assert dF == pytest.approx(expected, rel=1e-12)
     assert _fd_slope(lambda v: effective_friction(v, W, P.pack(vd=vd)), 0.0) == pytest.approx(expected, rel=1e-7)
@@ -98,14 +101,14 @@ def test_lugre_square_low_velocity_slope(vd):
 def test_analytic_slope_equals_finite_differences(dither):
     v = np.array([-0.9, -0.3, 0.05, 0.2, 0.38, 0.45, 0.7, 1.2])   # away from |v| = W
     W, p = 0.5, P.pack(vd=0.1)
-    F, dF = effective_friction(v, W, p, dither=dither, slope=True)
+    _F, dF = effective_friction(v, W, p, dither=dither, slope=True)
     fd = _fd_slope(lambda x: effective_friction(x, W, p, dither=dither), v)
     assert np.allclose(dF, fd, rtol=1e-6, atol=1e-6)
 
 
 def _zones(vd, W=0.5):
     v = np.linspace(0.0, 1.5, 150001)                # step 1e-5
-    F, dF = effective_friction(v, W, P.pack(vd=vd), slope=True)
+    _F, dF = effective_friction(v, W, P.pack(vd=vd), slope=True)
     return negative_slope_zones(v, dF)
 
 
@@ -124,7 +127,7 @@ def test_fig5b_secondary_zone_shrinks_to_a_sliver_for_small_vd():
     """Fig. 5(b), vd = 0.01: what remains below W is a sliver of width ~vd next to W
     (the sigma1(v - W) bump), >5x narrower than for vd = 0.1; another sliver of the
     same origin sits just above W, before the primary zone."""
-    wide = [z for z in _zones(0.1) if z[1] < 0.5][0]
+    wide = next(z for z in _zones(0.1) if z[1] < 0.5)
     zones = _zones(0.01)
     below = [z for z in zones if z[1] < 0.5]
     assert len(below) == 1

@@ -27,8 +27,8 @@ def _friction(u, z):
 
 def _time_domain(omega, t, v_m=VM, v_a=VA):
     T = 2 * np.pi / omega
-    rhs = lambda s, z: v_m + v_a * np.cos(omega * s) - S0 * np.abs(v_m + v_a * np.cos(omega * s)) * z / _g(v_m + v_a * np.cos(omega * s))  # noqa: E731
-    kw = dict(method="DOP853", rtol=1e-11, atol=1e-18)
+    rhs = lambda s, z: v_m + v_a * np.cos(omega * s) - S0 * np.abs(v_m + v_a * np.cos(omega * s)) * z / _g(v_m + v_a * np.cos(omega * s))
+    kw = {"method": "DOP853", "rtol": 1e-11, "atol": 1e-18}
     z0 = solve_ivp(rhs, (0, T), [0.0], **kw).y[0, -1]
     z1 = solve_ivp(rhs, (0, T), [1e-5], **kw).y[0, -1]
     zstar = z0 / (1 - (z1 - z0) / 1e-5)
@@ -60,8 +60,8 @@ def test_fourier_terms_are_appendix_a_bessel_coefficients():
     """Eq. A.4 (Q_n) and g's expansion e^{p cos} = I_0(p) + 2 sum I_n(p) cos(n wt),
     p = -v_a/v_s, p1 = -v_m/v_s, alpha0 = fc, alpha1 = fs - fc."""
     H, p, p1, a1 = 6, -VA / VS, -VM / VS, FS - FC
-    G, K, R = galerkin_terms(H, VM, VA, PC)
-    I = lambda n: iv(n, p)  # noqa: E731
+    G, _K, R = galerkin_terms(H, VM, VA, PC)
+    I = lambda n: iv(n, p)
     Q = [VM * FC + a1 * VM * np.exp(p1) * I(0) + a1 * VA * np.exp(p1) * I(1),
          VA * FC + 2 * a1 * VM * np.exp(p1) * I(1) + a1 * VA * np.exp(p1) * (I(2) + I(0))]
     Q += [a1 * VM * np.exp(p1) * 2 * I(n) + a1 * VA * np.exp(p1) * (I(n + 1) + I(n - 1))

@@ -7,7 +7,17 @@ from scipy.integrate import quad
 
 from engine import params as P
 from engine.analysis.effective import law_vector
-from engine.analysis.quadrature import A, B, C, N_AVG, S, SINE, SQUARE, gauss_legendre, phase_average
+from engine.analysis.quadrature import (
+    N_AVG,
+    SINE,
+    SQUARE,
+    A,
+    B,
+    C,
+    S,
+    gauss_legendre,
+    phase_average,
+)
 from engine.friction.stribeck import g, sigma1
 
 PAPER = P.pack()
@@ -43,7 +53,7 @@ def test_sine_rule_matches_adaptive_quadrature(v, W, vd):
     """<f> = (1/2 pi) int_0^{2 pi} f(v + W sin th) dth by scipy quad with the kink
     u = 0 as a break point, against the split Gauss-Legendre rule with n = 256."""
     brk = [np.arcsin(-v / W), np.pi - np.arcsin(-v / W)] if abs(v) < W else None
-    ref = [quad(lambda th: _integrands(v + W * np.sin(th), vd)[k], -np.pi / 2, 3 * np.pi / 2,
+    ref = [quad(lambda th, k=k: _integrands(v + W * np.sin(th), vd)[k], -np.pi / 2, 3 * np.pi / 2,
                 points=brk, epsabs=1e-13, epsrel=1e-13, limit=200)[0] / (2 * np.pi)
            for k in range(3)]
     assert np.allclose(_avg(v, W, SINE, 256, vd)[[A, B, C]], ref, rtol=1e-10, atol=1e-13)

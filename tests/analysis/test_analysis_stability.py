@@ -5,8 +5,13 @@ from scipy.optimize import brentq
 
 from engine import params as P
 from engine.analysis.chart import PU, STABLE, SU, UNKNOWN, stability_chart, stability_labels
-from engine.analysis.stability import (averaged_rhs, equilibrium, jacobian, max_real_eig,
-                                       static_max_real_eig)
+from engine.analysis.stability import (
+    averaged_rhs,
+    equilibrium,
+    jacobian,
+    max_real_eig,
+    static_max_real_eig,
+)
 
 PAPER = P.pack()
 CASES = [(0.2, 0.5, 0.1), (0.4, 0.1, 0.01), (0.3, 0.0, 0.1), (0.1, 0.35, 0.01), (0.25, 0.24, 0.01)]
@@ -14,7 +19,7 @@ CASES = [(0.2, 0.5, 0.1), (0.4, 0.1, 0.01), (0.3, 0.0, 0.1), (0.1, 0.35, 0.01), 
 
 def _fd_jacobian(x0, v_ref, W, vd, dither, mode="central"):
     J = np.empty((3, 3))
-    f = lambda x: averaged_rhs(x, v_ref, W, PAPER, dither=dither, vd=vd)  # noqa: E731
+    f = lambda x: averaged_rhs(x, v_ref, W, PAPER, dither=dither, vd=vd)
     for k in range(3):
         h = 1e-6 * max(1.0, abs(x0[k]))
         e = np.zeros(3)
@@ -35,7 +40,7 @@ def test_equilibrium_is_a_fixed_point_and_jacobian_matches_finite_differences(v_
     equals central differences of the right-hand side (away from the kink |v| = W)."""
     x0 = np.array([float(c) for c in equilibrium(v_ref, W, PAPER, dither=dither, vd=vd)])
     assert np.abs(averaged_rhs(x0, v_ref, W, PAPER, dither=dither, vd=vd)).max() < 1e-14
-    J, F = jacobian(v_ref, W, PAPER, dither=dither, vd=vd)
+    J, _F = jacobian(v_ref, W, PAPER, dither=dither, vd=vd)
     assert np.allclose(J, _fd_jacobian(x0, v_ref, W, vd, dither), rtol=1e-7, atol=1e-7)
 
 
@@ -87,7 +92,7 @@ def test_undithered_threshold_is_near_the_static_slope_condition():
     dynamics move the threshold by < 1e-4."""
     static = brentq(lambda v: -100.0 * v * np.exp(-100.0 * v * v) + 0.004, 0.2, 0.4)
     for vd in (0.1, 0.01):
-        lam = lambda v: max_real_eig(jacobian(v, 0.0, P.pack(vd=vd))[0])  # noqa: E731
+        lam = lambda v, vd=vd: max_real_eig(jacobian(v, 0.0, P.pack(vd=vd))[0])
         assert brentq(lam, 0.2, 0.4, xtol=1e-12) == pytest.approx(static, abs=1e-4)
         assert lam(0.01) > 0 and lam(0.29) > 0 and lam(0.31) < 0
 
