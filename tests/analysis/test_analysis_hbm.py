@@ -149,3 +149,25 @@ def test_bad_arguments():
         contact_hbm(VM, VA, 0.0, PC)
     with pytest.raises(ValueError, match="n_eval must be even"):
         contact_hbm(VM, VA, 1.0, PC, n_eval=101)
+
+
+@pytest.mark.parametrize("omega", [100.0, 3000.0])
+def test_hbm_matches_the_engines_contact_system(omega):
+    """The engine's own time integration of the contact system (engine.api.simulate,
+    dopri5, rtol 1e-10, 1 s of transient = ~80 bristle relaxation times): F_mean over the
+    following 10 periods and z(t) at every accepted step of them."""
+    api = pytest.importorskip("engine.api")
+    from engine.scene import Scene
+    from engine.settings import Settings
+    T = 2 * np.pi / omega
+    p = P.pack(P.CONTACT_DEFAULTS, W=VA, v_ref=VM, omega=omega, t_transient=1.0, t_end=1.0 + 10 * T)
+    scene = Scene(system="contact", friction="lugre", dither="sine-velocity", method="dopri5",
+                  outputs=("F_mean",))
+    sim = api.simulate(scene, p, Settings(rtol=1e-10, atol=1e-16), record=True)
+    r = contact_hbm(VM, VA, omega, PC)
+    assert sim.status == ST.OK
+    assert sim.outputs["F_mean"] == pytest.approx(r.loop(omega, VA)["F_mean"], rel=1e-9)
+    keep = sim.t >= 1.0
+    n = np.arange(r.z_coef.size)
+    z_hbm = np.real(np.exp(1j * omega * np.outer(sim.t[keep], n[:64])) @ r.z_coef[:64])
+    assert np.abs(sim.y[keep, 0] - z_hbm).max() < 1e-8 * np.abs(z_hbm).max()
