@@ -16,6 +16,7 @@ import os
 import sys
 from pathlib import Path
 
+from . import history
 from .spec import DEFAULT_MAX_POINTS, SpecError, load_spec
 
 EXIT_FAILED, EXIT_REFUSED = 1, 2
@@ -82,11 +83,12 @@ def cmd_status(args) -> int:
 
     cat = store.Catalogue(store_root(args.store))
     if args.sweep:
-        sweep_id, _ = resolve_sweep(store_root(args.store), args.sweep)
+        sweep_id, cube = resolve_sweep(store_root(args.store), args.sweep)
         row = cat.get(sweep_id)
         for key, value in row.items():
             if key != "spec_json":
                 print(f"{key:>14}: {value}")
+        _print_error_estimate(store.open_cube(cube))
         return 0
     rows = cat.list()
     if not rows:
@@ -97,6 +99,17 @@ def cmd_status(args) -> int:
         print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{r['state']:<9}{r['n_points']:>8}"
               f"{r['done_points']:>8}{r['failed_points']:>8}  {r['updated']}")
     return 0
+
+
+def _print_error_estimate(ds) -> None:
+    raw = ds.attrs.get("error_estimate")
+    if not raw:
+        return
+    est = json.loads(raw) if isinstance(raw, str) else raw
+    print(f"{'error est.':>14}: change against {est['compared_with']} on "
+          f"{est['sample_points']} sample points")
+    for name, rel in est["max_rel_change"].items():
+        print(f"{'':>16}{name:<22} abs {est['max_abs_change'][name]:9.2e}  rel {rel:9.2e}")
 
 
 def cmd_query(args) -> int:
@@ -154,10 +167,17 @@ def cmd_plan(args) -> int:
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
               f"atol={s.atol:g}; steps land on every square-wave switch")
     print(f"outputs    {', '.join(plan.outputs)}")
-    print(f"estimates  (calibrated now on this machine, {args.workers} workers)")
-    for est in estimates(spec, workers=args.workers):
+    print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
+          f"phase; cluster start and first compilation come on top)")
+    found = estimates(spec, workers=args.workers)
+    for est in found:
         print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
               f"per point  ->  {format_seconds(est.wall_s)} wall")
+    root = store_root(args.store)
+    previous = history.last_comparison(root)
+    history.record_estimate(root, plan.sweep_id, {e.level: e.wall_s for e in found})
+    if previous:
+        print(previous)
     return 0
 
 

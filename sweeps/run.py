@@ -9,6 +9,7 @@ the blocks missing from the journal.
 """
 from __future__ import annotations
 
+import json
 import logging
 import time
 from contextlib import contextmanager
@@ -21,6 +22,7 @@ import store
 from engine import params as P
 from engine import status as S
 
+from . import history
 from .outputs import output_attrs
 from .plan import Plan
 from .version import __version__
@@ -162,6 +164,9 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
         timings=timings)
     store.publish(cube, sweep.cube)
+    if "compute_s" in timings and max_blocks is None:
+        history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
+                              timings["compute_s"])
     return _result(plan, sweep, catalogue, cube, blocks_run=len(todo), t0=t0, timings=timings)
 
 
@@ -205,7 +210,24 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
             sink(futures[future], future.result())
             bar.update(1)
         timings["compute_s"] = time.perf_counter() - t
+        if todo and plan.path == "simulate":
+            t = time.perf_counter()
+            sink.cube.attrs["error_estimate"] = json.dumps(_error_estimate(plan, client,
+                                                                           sink.cube))
+            timings["error_estimate_s"] = time.perf_counter() - t
     bar.close()
+
+
+def _error_estimate(plan: Plan, client, cube) -> dict:
+    """Re-run a sample one accuracy level finer on the cluster (sweeps.errors)."""
+    from . import errors
+
+    finer = errors.finer_numerics(plan)
+    index, pts = errors.sample(plan)
+    scene = plan.scene.with_(method=finer.integrator)
+    result = client.submit(compute_block, scene, pts, plan.params, finer.settings,
+                           pure=False).result()
+    return errors.compare(plan, cube, index, result, finer.label)
 
 
 def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,

@@ -1,0 +1,53 @@
+"""How far off were the plan's estimates? A small record in the store.
+
+``ditherlab plan`` writes its estimate of each level to ``<store>/estimates.json``;
+``submit`` adds the measured wall time when the same sweep finishes at that level; the
+next ``plan`` prints how the last estimate compared with reality.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+FILE = "estimates.json"
+
+
+def _load(root: Path) -> dict:
+    try:
+        return json.loads((Path(root) / FILE).read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _save(root: Path, data: dict) -> None:
+    from store.layout import atomic_write
+
+    atomic_write(Path(root) / FILE, lambda tmp: tmp.write_text(json.dumps(data, indent=1)))
+
+
+def record_estimate(root: Path, sweep_id: str, estimates: dict[str, float]) -> None:
+    """Remember the estimated wall seconds per level for ``sweep_id``."""
+    data = _load(root)
+    data[sweep_id] = {"estimated_s": estimates, "when": time.time()}
+    _save(root, data)
+
+
+def record_actual(root: Path, sweep_id: str, level: str, wall_s: float) -> None:
+    """Remember the measured wall time of a sweep that was estimated before."""
+    data = _load(root)
+    if sweep_id in data and level in data[sweep_id]["estimated_s"]:
+        data[sweep_id].setdefault("actual_s", {})[level] = wall_s
+        _save(root, data)
+
+
+def last_comparison(root: Path) -> str | None:
+    """One line on the newest estimate that has a measured counterpart."""
+    rows = [(v["when"], k, v) for k, v in _load(root).items() if v.get("actual_s")]
+    if not rows:
+        return None
+    _, sweep_id, row = max(rows)
+    level, actual = next(iter(row["actual_s"].items()))
+    est = row["estimated_s"][level]
+    return (f"last checked estimate: sweep {sweep_id} at {level}: estimated {est:.1f} s, "
+            f"took {actual:.1f} s ({(est - actual) / actual * 100:+.0f} %)")
