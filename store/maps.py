@@ -90,7 +90,12 @@ def _title(ds: xr.Dataset, what: str, da: xr.DataArray, title: str | None) -> st
         return title
     sweep = ds.attrs.get(A.NAME) or "cube"
     sweep_id = str(ds.attrs.get(A.SWEEP_ID, ""))[:10]
-    fixed = ", ".join(f"{k} = {float(c):g}" for k, c in da.coords.items() if c.ndim == 0)
+    # the averaged theory is the omega -> infinity limit: its omega coordinate means nothing
+    hidden = {"omega"} if ds.attrs.get("path") == "averaged" else set()
+    fixed = ", ".join(f"{k} = {float(c):g}" for k, c in da.coords.items()
+                      if c.ndim == 0 and k not in hidden)
+    if hidden:
+        fixed = ", ".join(filter(None, [fixed, "averaged (omega -> infinity)"]))
     head = f"{what}: {sweep}" + (f" ({sweep_id})" if sweep_id else "")
     return head + (f"\n{fixed}" if fixed else "")
 
