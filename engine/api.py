@@ -65,7 +65,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     p = P.pack(**p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
-    pk = point_kernel(scene, bool(record))
+    pk = point_kernel(scene)
     cfg = settings_to_cfg(settings or Settings(), record_every)
     y, obs = np.empty(pk.n), np.empty(pk.obs_size)
     out = np.empty(len(pk.names))

@@ -2,7 +2,8 @@
 
 Everything a Scene switches off is absent from the compiled code (its flags are Python
 constants closed over by the njit factories). Kernels are cached with
-``functools.lru_cache`` on ``(scene, record)``; a worker process compiles each scene once.
+``functools.lru_cache`` on the (hashable, frozen) Scene; a worker process compiles each
+scene once. Recording steps (API only) is a run-time choice: an empty ``rec`` array.
 """
 from __future__ import annotations
 
@@ -54,13 +55,13 @@ def method_module(scene):
 
 
 @lru_cache(maxsize=None)
-def point_kernel(scene, record: bool = False) -> PointKernel:
+def point_kernel(scene) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``."""
     system = make_system(scene)
     observer = make_observer(scene, system)
     problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
                       n_events=system.n_events, events=system.events,
-                      observe=observer.observe, record=record, needs_mid=observer.needs_mid)
+                      observe=observer.observe, record=True, needs_mid=observer.needs_mid)
     stepper = method_module(scene).make_stepper(problem)
     solve = make_solve(stepper, observer, scene.dither)
     init, obs_init, finish = system.init, observer.init, observer.finish
@@ -91,7 +92,7 @@ def block_kernel(scene) -> Callable:
     in the order of the scene's scalar outputs; ``status`` ``(m,)`` int8; ``counters``
     ``(m, 3)`` int64: accepted steps, rejected steps, evaluations.
     """
-    pk = point_kernel(scene, False)
+    pk = point_kernel(scene)
     n, size, k = pk.n, pk.obs_size, len(pk.names)
     alloc, run_point = pk.alloc, pk.run_point
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)

@@ -103,7 +103,7 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
     interface, position, velocity, qf = (system.interface, system.position,
                                          system.velocity, system.qf)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def init(obs):
         obs[:] = 0.0
         obs[O_RUN] = np.nan
@@ -111,7 +111,7 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
         obs[O_VMIN] = np.inf
         obs[O_VMAX] = -np.inf
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def start(t, y, p, sq, obs):
         obs[O_ON] = 1.0
         obs[O_T0] = t
@@ -123,7 +123,7 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
             obs[O_VMIN] = v
             obs[O_VMAX] = v
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def observe(t0, y0, t1, y1, ymid, p, sq, obs):
         if obs[O_ON] == 0.0:
             return
@@ -135,7 +135,7 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
             obs[O_VMIN] = min(obs[O_VMIN], v)
             obs[O_VMAX] = max(obs[O_VMAX], v)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def stop(t, y, p, is_period, obs):
         if not p2p_periods or not is_period or obs[O_ON] == 0.0:
             return
@@ -178,7 +178,7 @@ def _make_finish(system, names):
     codes = np.array([tuple(SIMULATE).index(nm) for nm in names], dtype=np.int64)
     position, qf = system.position, system.qf
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def finish(t, y, p, obs, out):
         if not math.isnan(obs[O_RUN]):
             _close_run(obs, t, p[P.LONG_STICK])

@@ -28,7 +28,8 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
       Karnopp band edges). Adaptive methods should step exactly onto them (see dopri5);
     - ``observe(t0, y0, t1, y1, ymid, p, sq, obs)``: call after every accepted step
       (``ymid`` = state at ``(t0 + t1) / 2`` from the method's dense output);
-    - ``record``: True when accepted steps must be appended to ``rec`` (API only);
+    - ``record``: when True call ``record_step`` after each accepted step (it is a run-time
+      no-op for the empty ``rec`` of the batch path);
     - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation).
 
     It returns ``Stepper(alloc, segment)``, two njit functions:
@@ -45,8 +46,8 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
         ``FRESH_NONE`` at other stops (caches stay valid). Step-size state carried between
         segments lives in ``work``. Counters go to ``ctr[CTR_STEPS]``, ``ctr[CTR_REJECTED]``,
         ``ctr[CTR_EVALS]``; with ``problem.record`` call
-        ``engine.integrators.problem.record_step(rec, ctr, cfg, t, y)`` after each accepted step (``rec`` is
-        ``(capacity, 1 + n)``: time, then state). Returns an
+        ``engine.integrators.problem.record_step(rec, ctr, cfg, t, y)`` after each
+        accepted step (``rec`` is ``(capacity, 1 + n)``: time, then state). Returns an
         ``engine.status`` code: ``OK``, ``FAILED`` (``ctr[CTR_STEPS] + ctr[CTR_REJECTED]``
         exceeded ``cfg[CFG_MAX_STEPS]`` or the step underflowed) or ``NON_FINITE``.
 

@@ -195,7 +195,7 @@ def make_stepper(problem) -> Stepper:
     locate = make_locator(events, n_ev, dense_eval)
     n_g = max(n_ev, 1)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def alloc():
         # K: stages k1..k7; Y: yt, yn, ymid, ytmp; Q: dense coefficients;
         # G: event values at step start / end / scratch; state: h, reject flag

@@ -41,7 +41,7 @@ class Problem(NamedTuple):
     n_events: int          # number of kink functions (0: none)
     events: Callable       # events(t, y, p, sq, g): g[:n_events]
     observe: Callable      # observe(t0, y0, t1, y1, ymid, p, sq, obs)
-    record: bool = False   # append accepted steps (time, state) to rec
+    record: bool = True    # call record_step (a run-time no-op for an empty rec)
     needs_mid: bool = True # observe reads ymid (else methods may pass any array)
 
 
@@ -57,8 +57,9 @@ class Stepper(NamedTuple):
 def record_step(rec, ctr, cfg, t, y):
     """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec`` (shape ``(capacity, 1 + n)``)
     for every ``cfg[CFG_RECORD_EVERY]``-th accepted step; call after counting the step.
-    Silently stops when ``rec`` is full (the API reports truncation)."""
-    if ctr[CTR_STEPS] % max(1, int(cfg[CFG_RECORD_EVERY])) != 0:
+    A zero-capacity ``rec`` (the batch path) records nothing at the cost of one branch;
+    silently stops when ``rec`` is full (the API reports truncation)."""
+    if rec.shape[0] == 0 or ctr[CTR_STEPS] % max(1, int(cfg[CFG_RECORD_EVERY])) != 0:
         return
     i = ctr[CTR_NREC]
     if i < rec.shape[0]:

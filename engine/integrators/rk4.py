@@ -48,7 +48,7 @@ def make_stepper(problem) -> Stepper:
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
     m1, m2, m3, m4 = _mid_weights(TABLEAU)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def alloc():
         return np.empty((7, n))
 

@@ -77,7 +77,7 @@ def make_interface(scene):
     speed = make_speed(scene)
     law = make_law(scene)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def interface(t, y, p, sq):
         u = speed(t, p, sq)
         dz, F, a = law(u, y[Z], 0.0, p)
@@ -100,7 +100,7 @@ def make_position(scene):
     """njit ``position(t, y, p)``: integral of u (0.0 when not tracked)."""
     qx = position_index(scene)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def position(t, y, p):
         return y[qx] if qx >= 0 else 0.0
     return position
@@ -110,7 +110,7 @@ def make_velocity(scene):
     """njit ``velocity(t, y, p, sq) = u(t)``."""
     speed = make_speed(scene)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def velocity(t, y, p, sq):
         return speed(t, p, sq)
     return velocity
@@ -120,7 +120,7 @@ def make_init(scene):
     """``(n, init(p, y))``: ``z0`` from ``p``, quadrature states zeroed."""
     n = N_BASE + (quadrature_index(scene) >= 0) + (position_index(scene) >= 0)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def init(p, y):
         y[:] = 0.0
         y[Z] = p[P.Z0]

@@ -85,7 +85,7 @@ def make_interface(scene):
     drive = make_drive(scene)
     law = make_law(scene)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def interface(t, y, p, sq):
         u, fext, hold = drive(t, y, p, sq)
         dz, F, a = law(u, y[Z], hold, p)
@@ -107,7 +107,7 @@ def make_events(scene):
 
 def make_position(scene):
     """njit ``position(t, y, p) = v_ref t - e``, the slider displacement (up to a constant)."""
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def position(t, y, p):
         return p[P.V_REF] * t - y[E]
     return position
@@ -115,7 +115,7 @@ def make_position(scene):
 
 def make_velocity(scene):
     """njit ``velocity(t, y, p, sq) = v``, the slider velocity (dither not included)."""
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def velocity(t, y, p, sq):
         return y[V]
     return velocity
@@ -125,7 +125,7 @@ def make_init(scene):
     """njit ``init(p, y)``: ``(e0, v0, z0)`` from ``p``, quadrature states zeroed."""
     n = N_BASE + (quadrature_index(scene) >= 0)
 
-    @njit(error_model="numpy")
+    @njit(inline="always", error_model="numpy")
     def init(p, y):
         y[:] = 0.0
         y[E], y[V], y[Z] = p[P.E0], p[P.V0], p[P.Z0]

@@ -1,0 +1,147 @@
+"""Independent high-accuracy references for the engine tests (scipy, plain numpy).
+
+The equations are re-typed here from DESIGN.md §1 (not imported from the engine) and
+integrated with ``scipy.integrate.solve_ivp(method="DOP853", rtol=1e-12, atol=1e-14)``,
+restarted at every square-wave switch ``k pi / omega`` and at every kink of the right-hand
+side (``u = 0``; elasto-plastic ``|z| = z_ba``, ``|z| = z_ss``), located as terminal
+events. After a kink the first ``NUDGE`` of time is integrated without events so the same
+root is not found twice (the error this adds is of order jump * NUDGE**2).
+
+The static laws (coulomb / stribeck) are integrated as a hybrid automaton with exact
+sticking (``v + W sq == 0`` held, breakaway when the holding force exceeds the break-away
+level): the engine's Karnopp band of width ``stick_band`` must agree with it to O(band).
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+RTOL, ATOL = 1e-12, 1e-14
+NUDGE = 1e-9
+
+
+def g(u, d):
+    return d["fc"] + (d["fs"] - d["fc"]) * np.exp(-abs(u / d["vs"]) ** d["delta"])
+
+
+def sigma1(u, d):
+    return d["sigma1"] * np.exp(-abs(u / d["vd"]) ** d["delta_d"])
+
+
+def alpha_ep(z, u, d):
+    """Eq. 2.7 with |z| (DESIGN.md §1)."""
+    if u == 0 or z == 0 or np.sign(u) != np.sign(z):
+        return 0.0
+    zss = g(u, d) / d["sigma0"]
+    zba = d["lam"] * zss
+    if abs(z) <= zba:
+        return 0.0
+    if abs(z) >= zss:
+        return 1.0
+    return 0.5 * np.sin(np.pi * (abs(z) - 0.5 * (zss + zba)) / (zss - zba)) + 0.5
+
+
+def interface(t, y, d, dither, sq):
+    """(u, f_ext): interface velocity and non-friction force of the slider."""
+    e, v = y[0], y[1]
+    f = e + d["slow_a"] * np.sin(d["slow_omega"] * t)
+    if dither == "square-velocity":
+        return v + d["W"] * sq, f
+    if dither == "sine-velocity":
+        return v + d["W"] * np.sin(d["omega"] * t), f
+    if dither == "sine-force":
+        return v, f + d["W"] * d["omega"] * np.sin(d["omega"] * t)
+    return v, f
+
+
+def friction(u, z, d, law):
+    """(dz, F) of a bristle law, or of a static law while sliding (Eq. 2.2)."""
+    if law in ("lugre", "elastoplastic"):
+        a = 1.0 if law == "lugre" else alpha_ep(z, u, d)
+        dz = u - a * d["sigma0"] * abs(u) * z / g(u, d)
+        return dz, d["sigma0"] * z + sigma1(u, d) * dz + d["sigma2"] * u
+    level = g(u, d) if law == "stribeck" else d["fc"]
+    return 0.0, level * np.sign(u) + d["sigma2"] * u
+
+
+def slider_rhs(t, y, d, law, dither, sq):
+    """(e, v, z, Q) with dQ = F (DESIGN.md §1 slider)."""
+    u, f = interface(t, y, d, dither, sq)
+    dz, F = friction(u, y[2], d, law)
+    return [d["v_ref"] - y[1], f - F, dz, F]
+
+
+def _kinks(d, law, dither, sq):
+    def ev_u(t, y):
+        return interface(t, y, d, dither, sq)[0]
+    evs = [ev_u]
+    if law == "elastoplastic":
+        for frac in (d["lam"], 1.0):
+            evs.append(lambda t, y, frac=frac: abs(y[2]) - frac * g(ev_u(t, y), d) / d["sigma0"])
+    for ev in evs:
+        ev.terminal = True
+    return evs
+
+
+def _piece(fun, t0, t1, y, events):
+    """Integrate fun over [t0, t1] restarting at terminal events; returns y(t1)."""
+    t = t0
+    while t < t1:
+        sol = solve_ivp(fun, (t, t1), y, method="DOP853", rtol=RTOL, atol=ATOL, events=events)
+        y = sol.y[:, -1]
+        if sol.status != 1:
+            return y
+        t = sol.t[-1]
+        t_n = min(t + NUDGE, t1)
+        y = solve_ivp(fun, (t, t_n), y, method="DOP853", rtol=RTOL, atol=ATOL).y[:, -1]
+        t = t_n
+    return y
+
+
+def slider(d: dict, law: str, dither: str, y0, t_end: float) -> np.ndarray:
+    """State (e, v, z, Q) of the slider at t_end, bristle laws or sliding static laws."""
+    y = np.array(list(y0) + [0.0], dtype=float)
+    hp = np.pi / d["omega"] if dither == "square-velocity" else t_end
+    k = 0
+    while k * hp < t_end:
+        t0, t1 = k * hp, min((k + 1) * hp, t_end)
+        sq = 1.0 if k % 2 == 0 else -1.0
+        fun = lambda t, yy, sq=sq: slider_rhs(t, yy, d, law, dither, sq)  # noqa: E731
+        y = _piece(fun, t0, t1, y, _kinks(d, law, dither, sq))
+        k += 1
+    return y
+
+
+def static_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarray, list]:
+    """Undithered slider with a static law as a hybrid automaton, from rest.
+
+    Stick: ``v = 0``, ``de = v_ref``, until ``|e + f_slow| > f_break``. Slip: Eq. 2.2 until
+    ``v`` reaches 0, then stick if ``|e + f_slow| <= f_break``. Returns ``(e, v)`` at t_end and
+    the list of (start, end) sticking intervals.
+    """
+    fb = d["fs"] if law == "stribeck" else d["fc"]
+    hold = lambda t, e: e + d["slow_a"] * np.sin(d["slow_omega"] * t)  # noqa: E731
+    t, e, v, sticks = 0.0, 0.0, 0.0, []
+    while t < t_end:
+        # stick: e(t) = e + v_ref (t - t_s) until breakaway
+        brk = lambda tt, yy: abs(hold(tt, yy[0])) - fb  # noqa: E731
+        brk.terminal = True
+        sol = solve_ivp(lambda tt, yy: [d["v_ref"]], (t, t_end), [e], events=brk,
+                        method="DOP853", rtol=RTOL, atol=ATOL)
+        sticks.append((t, sol.t[-1]))
+        t, e = sol.t[-1], sol.y[0, -1]
+        if t >= t_end:
+            return np.array([e, 0.0]), sticks
+        sgn = np.sign(hold(t, e))
+        rhs = lambda tt, yy: [d["v_ref"] - yy[1], hold(tt, yy[0])  # noqa: E731
+                              - friction(yy[1] if yy[1] != 0 else sgn * 1e-300, 0.0, d, law)[1]]
+        stop = lambda tt, yy: yy[1] if tt > t + NUDGE else sgn  # noqa: E731
+        stop.terminal = True
+        sol = solve_ivp(rhs, (t, t_end), [e, 0.0], events=stop, method="DOP853",
+                        rtol=RTOL, atol=ATOL)
+        t, e, v = sol.t[-1], sol.y[0, -1], sol.y[1, -1]
+        if sol.status != 1:
+            return np.array([e, v]), sticks
+        if abs(hold(t, e)) > fb:
+            raise NotImplementedError("slip reversal without sticking: not needed by the tests")
+    return np.array([e, v]), sticks
