@@ -124,3 +124,363 @@ def cheapest(run, settings, q_ref, accuracy):
         if err <= accuracy:
             return s, res, err
     return None
+
+
+# --------------------------------------------------------------------------- engine
+def engine_params(W: float):
+    """Parameter vector of an anchor scene (paper set, from rest, no transient window)."""
+    from engine import params as P
+    return P.pack(v_ref=V_REF, W=W, omega=OMEGA, t_end=T_END, t_transient=0.0)
+
+
+def qoi_observer():
+    """An engine Observer that samples v at the switching instants in [T_WIN, T_END]
+    (the driver's stop hook) and writes q = [z, e, v, mean v, p2p v] at the end -- the
+    anchor's QoI; the engine's own observables average over time, not over instants."""
+    from numba import njit
+
+    from engine.observables import Observer
+    from engine.systems.slider import E, V, Z
+
+    @njit
+    def init(obs):
+        obs[0], obs[1], obs[2], obs[3] = 0.0, 0.0, np.inf, -np.inf
+
+    @njit
+    def start(t, y, p, sq, obs):
+        pass
+
+    @njit
+    def observe(t0, y0, t1, y1, ymid, p, sq, obs):
+        pass
+
+    @njit
+    def stop(t, y, p, is_period, obs):
+        if t >= T_WIN:
+            v = y[V]
+            obs[0] += v
+            obs[1] += 1.0
+            obs[2] = min(obs[2], v)
+            obs[3] = max(obs[3], v)
+
+    @njit
+    def finish(t, y, p, obs, out):
+        out[0], out[1], out[2] = y[Z], y[E], y[V]
+        out[3] = obs[0] / obs[1]
+        out[4] = obs[3] - obs[2]
+
+    names = ("z", "e", "v", "v_mean_switch", "v_p2p_switch")
+    return Observer(4, names, False, False, init, start, observe, stop, finish)
+
+
+class EngineQoI:
+    """One compiled engine trajectory per method with the QoI observer above, built from the
+    engine's own pieces (systems, integrator METHODS, shared driver)."""
+
+    def __init__(self, method: str):
+        from numba import njit
+
+        from engine import params as P
+        from engine import status as S
+        from engine.integrators import METHODS
+        from engine.integrators.driver import make_solve
+        from engine.integrators.problem import CTR_SIZE, Problem
+        from engine.scene import Scene
+        from engine.systems import make_system
+
+        # W = 0 keeps the square-wave scene so that both scenes stop at every switch (as
+        # the anchor's rk4/dp5 do); the physics is that of dither "none".
+        scene = Scene(method=method, slow_force=False, outputs=())
+        system = make_system(scene)
+        obs = qoi_observer()
+        problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
+                          n_events=system.n_events, events=system.events,
+                          observe=obs.observe, record=False, needs_mid=False)
+        stepper = METHODS[method].make_stepper(problem)
+        solve = make_solve(stepper, obs, scene.dither)
+        init, obs_init, finish, n = system.init, obs.init, obs.finish, system.n
+        i_end = P.T_END
+
+        @njit
+        def run(p, cfg, work, y, o, out, ctr, rec):
+            init(p, y)
+            obs_init(o)
+            ctr[:] = 0
+            st = solve(work, y, p, cfg, o, ctr, rec)
+            finish(p[i_end], y, p, o, out)
+            return st
+
+        self.method, self.run_jit, self.ok = method, run, S.OK
+        self.work = stepper.alloc()
+        self.y, self.o, self.out = np.empty(n), np.empty(4), np.empty(5)
+        self.ctr = np.zeros(CTR_SIZE, np.int64)
+        self.rec = np.empty((0, n + 1))
+        self.adaptive = METHODS[method].ADAPTIVE
+
+    def cfg(self, setting):
+        from engine.kernels import settings_to_cfg
+        from engine.settings import Settings
+        if self.adaptive:
+            return settings_to_cfg(Settings(rtol=setting, atol=1e-2 * setting))
+        return settings_to_cfg(Settings(steps_per_period=int(setting)))
+
+    def runner(self, W, setting):
+        """Zero-argument callable running one trajectory (for the timing loop)."""
+        p, cfg = engine_params(W), self.cfg(setting)
+        args = (p, cfg, self.work, self.y, self.o, self.out, self.ctr, self.rec)
+        return lambda: self.run_jit(*args)
+
+    def run(self, W, setting):
+        """(q, steps, evals, rejected) of one trajectory; q is NaN when the status is not OK."""
+        st = self.runner(W, setting)()
+        q = self.out.copy() if st == self.ok else np.full(5, np.nan)
+        return q, int(self.ctr[0]), int(self.ctr[2]), int(self.ctr[1])
+
+
+# --------------------------------------------------------------------------- table 1
+RK4_N = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128)
+RTOLS = tuple(10.0 ** (-k / 2) for k in range(6, 27))          # 1e-3 ... 1e-13
+C_OF = {"rk4": "rk4", "dopri5": "dp5"}                           # same algorithm in C
+C_ONLY = ("dp5dense",)                                           # C's no-stop variant
+
+
+def settings_for(method: str):
+    return RK4_N if method in ("rk4",) else RTOLS
+
+
+def fmt_setting(method: str, s) -> str:
+    return f"N={int(s)}" if method == "rk4" else f"rtol={s:.0e}"
+
+
+def c_cheapest(anchor: Anchor, W: float, q_ref, acc: float) -> dict:
+    """C method -> (setting, result, error) of its cheapest setting reaching ``acc``."""
+    out = {}
+    for cm in ("rk4", "dp5") + C_ONLY:
+        hit = cheapest(lambda s: anchor.run(cm, W, s), RK4_N if cm == "rk4" else RTOLS,
+                       q_ref, acc)
+        if hit is not None:
+            out[cm] = hit
+    return out
+
+
+def speed_row(scene, acc, m, hit, t, ratio=None, ratio_same=None, vs_best=None):
+    q, steps, evals, rej = hit[1]
+    kind = "rk4" if m.endswith("rk4") else "adaptive"
+    return dict(scene=scene, acc=acc, method=m, setting=fmt_setting(kind, hit[0]), error=hit[2],
+                t=t, steps=steps, evals=evals, ns=1e9 * t / evals, ratio=ratio,
+                ratio_same=ratio_same, vs_best=vs_best)
+
+
+def table_speed(anchor: Anchor, methods, refs, repeats: int):
+    """Table 1: cheapest setting per (scene, accuracy, method), timed paired with C.
+
+    ``ratio`` = engine / C of the same algorithm, each at its own cheapest setting;
+    ``ratio_same`` = engine / C at the engine's setting (same steps: implementation cost).
+    """
+    engines = {m: EngineQoI(m) for m in methods}
+    for eng in engines.values():                       # compile outside the timings
+        eng.run(0.4, settings_for(eng.method)[0])
+    rows = []
+    for scene, W in SCENES.items():
+        for acc in ACCURACIES:
+            c_hits = c_cheapest(anchor, W, refs[scene], acc)
+            c_fns = {cm: (lambda cm=cm, s=h[0]: anchor.run(cm, W, s)) for cm, h in c_hits.items()}
+            for m, eng in engines.items():
+                hit = cheapest(lambda s: eng.run(W, s), settings_for(m), refs[scene], acc)
+                if hit is None:
+                    rows.append(dict(scene=scene, acc=acc, method=m, setting="not reached"))
+                    continue
+                fns = [eng.runner(W, hit[0])] + list(c_fns.values())
+                same = C_OF.get(m)
+                if same:
+                    fns.append(lambda s=hit[0], cm=same: anchor.run(cm, W, s))
+                times = paired_medians(fns, repeats)
+                t_c = dict(zip(c_fns, times[1:1 + len(c_fns)]))
+                rows.append(speed_row(
+                    scene, acc, m, hit, times[0],
+                    ratio=times[0] / t_c[same] if same in t_c else None,
+                    ratio_same=times[0] / times[-1] if same else None,
+                    vs_best=times[0] / min(t_c.values()) if t_c else None))
+            for cm, hit in c_hits.items():
+                rows.append(speed_row(scene, acc, "C " + cm, hit,
+                                      paired_medians([c_fns[cm]], repeats)[0]))
+    return rows
+
+
+def print_speed(rows):
+    print("\nTable 1 -- engine vs the C anchor, same process (error: anchors/README.md; "
+          "time: median of paired repeats)")
+    print("  ratio C = engine / C same algorithm, each at its cheapest setting; same-N = at the "
+          "engine's setting (same steps); vs best = engine / cheapest C of any algorithm")
+    hdr = (f"{'scene':9s} {'acc':>6s} {'method':11s} {'setting':11s} {'error':>9s} "
+           f"{'time ms':>9s} {'steps':>9s} {'evals':>10s} {'ns/eval':>8s} {'ratio C':>8s} "
+           f"{'same-N':>7s} {'vs best':>8s}")
+    print(hdr)
+    print("-" * len(hdr))
+    x = lambda v: f"{v:.2f}x" if v else "-"
+    for r in rows:
+        if "error" not in r:
+            print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:11s} {r['setting']}")
+            continue
+        print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:11s} {r['setting']:11s} "
+              f"{r['error']:9.2e} {1e3 * r['t']:9.3f} {r['steps']:9d} {r['evals']:10d} "
+              f"{r['ns']:8.1f} {x(r['ratio']):>8s} {x(r['ratio_same']):>7s} "
+              f"{x(r['vs_best']):>8s}")
+
+
+# --------------------------------------------------------------------------- table 2
+class TimeCap(Exception):
+    pass
+
+
+def scipy_fig10(method: str, rtol: float, cap_s: float):
+    """solve_ivp on fig10 the way a scipy user would: sign(sin) inside the RHS, no restarts,
+    v sampled by dense output (t_eval) at the switching instants in [T_WIN, T_END].
+    Returns (q or None, seconds, capped)."""
+    from scipy.integrate import solve_ivp
+    sig0, sig1, sig2, vs, vd, fc, fs, W = SIGMA0, 10.0, 0.004, 0.1, 0.1, FC, 1.5, 0.4
+    deadline = time.perf_counter() + cap_s
+
+    def rhs(t, y):
+        if time.perf_counter() > deadline:
+            raise TimeCap
+        z, e, v = y
+        u = v + (W if math.sin(OMEGA * t) >= 0.0 else -W)
+        g = fc + (fs - fc) * math.exp(-(u / vs) ** 2)
+        dz = u - sig0 * abs(u) * z / g
+        F = sig0 * z + sig1 * math.exp(-(u / vd) ** 2) * dz + sig2 * u
+        return [dz, V_REF - v, e - F]
+
+    hp = math.pi / OMEGA
+    k = np.arange(math.ceil(T_WIN / hp), math.floor(T_END / hp) + 1)
+    t_eval = np.append(k * hp, T_END)
+    t0 = time.perf_counter()
+    try:
+        sol = solve_ivp(rhs, (0.0, T_END), [0.0, 0.0, 0.0], method=method, rtol=rtol,
+                        atol=1e-2 * rtol, t_eval=t_eval)
+    except TimeCap:
+        return None, time.perf_counter() - t0, True
+    v = sol.y[2, :-1]
+    q = np.array([sol.y[0, -1], sol.y[1, -1], sol.y[2, -1], v.mean(), v.max() - v.min()])
+    return q, time.perf_counter() - t0, False
+
+
+def table_scipy(engine_t: float, engine_label: str, q_ref, cap_s: float):
+    """Table 2: scipy solve_ivp on fig10 against the engine's cheapest 1e-4 trajectory."""
+    print(f"\nTable 2 -- scipy solve_ivp on fig10 (run once, time cap {cap_s:.0f} s) vs the engine "
+          f"({engine_label}, {1e3 * engine_t:.2f} ms)")
+    print(f"{'method':8s} {'rtol':>7s} {'error':>10s} {'time s':>8s} {'engine speed-up':>16s}")
+    for method, rtol in (("DOP853", 1e-10), ("RK45", 1e-10)):
+        q, secs, capped = scipy_fig10(method, rtol, cap_s)
+        err = "capped" if capped else f"{qoi_error(q, q_ref):.2e}"
+        ge = ">=" if capped else ""
+        print(f"{method:8s} {rtol:7.0e} {err:>10s} {ge + f'{secs:.1f}':>8s} "
+              f"{ge + f'{secs / engine_t:,.0f}x':>16s}", flush=True)
+
+
+# --------------------------------------------------------------------------- table 3
+EFFECTS = (  # label, parameter overrides that remove the effect, scene changes when removed
+    ("Stribeck (fs = fc)", {"fs": 1.0}, {}),
+    ("bristle damping (sigma1 = 0)", {"sigma1": 0.0}, {}),
+    ("viscous (sigma2 = 0)", {"sigma2": 0.0}, {}),
+    ("slow force (A_s = 0)", {"slow_a": 0.0}, {}),
+    ("dither (W = 0)", {"W": 0.0}, {"dither": "none"}),
+)
+
+
+def table_effects(repeats: int, n_steps: int = 4):
+    """Table 3: cost per trajectory with and without each effect (engine.api.simulate, rk4
+    with ``n_steps`` per half-period, so every row takes the same steps)."""
+    from engine import params as P
+    from engine.api import simulate
+    from engine.outputs import SIMULATE
+    from engine.scene import Scene
+    from engine.settings import Settings
+
+    st = Settings(steps_per_period=n_steps, h=(math.pi / OMEGA) / n_steps)
+    full_p = P.pack(v_ref=V_REF, W=0.4, omega=OMEGA, t_end=T_END, slow_a=1.7, slow_omega=0.3)
+    full = Scene.from_params(full_p, method="rk4")
+    run = lambda sc, p: (lambda: simulate(sc, p, st))
+    print(f"\nTable 3 -- only the effects a scene calls for (fig10 + slow force 1.7 sin(0.3 tau), "
+          f"rk4 N={n_steps}, {T_END:.0f} tau; ms per trajectory, median of {repeats})")
+    print(f"{'effect':32s} {'with':>8s} {'zero, compiled in':>18s} {'specialised':>12s} "
+          f"{'saved':>7s}")
+    for label, off, change in EFFECTS:
+        p_off = full_p.copy()
+        for k, v in off.items():
+            p_off[P.INDEX[k]] = v
+        lean = Scene.from_params(p_off, method="rk4", dither=change.get("dither", full.dither))
+        fns = [run(full, full_p), run(full, p_off), run(lean, p_off)]
+        for fn in fns:
+            fn()
+        t = paired_medians(fns, repeats)
+        print(f"{label:32s} {1e3 * t[0]:8.2f} {1e3 * t[1]:18.2f} {1e3 * t[2]:12.2f} "
+              f"{100 * (1 - t[2] / t[1]):6.0f}%", flush=True)
+    rows = [("elasto-plastic phases vs LuGre", full.with_(friction="elastoplastic"), full)]
+    rows += [(f"observable {o}", full.with_(outputs=(o,)), full) for o in SIMULATE]
+    for label, with_, without in rows:
+        fns = [run(with_, full_p), run(without, full_p)]
+        for fn in fns:
+            fn()
+        t = paired_medians(fns, repeats)
+        print(f"{label:32s} {1e3 * t[0]:8.2f} {'':>18s} {1e3 * t[1]:12.2f} "
+              f"{100 * (1 - t[1] / t[0]):6.0f}%", flush=True)
+
+
+# --------------------------------------------------------------------------- table 4
+def table_stiff(rtols=(1e-4, 1e-6, 1e-8)):
+    """Table 4: stiff contacts (sigma0 = 1e4, 1e6; tests/hard cases over 5 tau) -- RODAS
+    against explicit DP5: steps, evaluations, time, error against the scipy Radau reference
+    (tests/hard/references.json) and the bound max|z| sigma0 / fs <= 1."""
+    from tests.hard.hardcases import REFS, error_units, run
+
+    print("\nTable 4 -- stiff contacts: fig10 with sigma0 = 1e4 / 1e6, 5 tau; error vs scipy "
+          "Radau (rtol 1e-11, restarted at switches) in anchor error units; time includes "
+          "recording every step for the QoI")
+    hdr = (f"{'sigma0':>7s} {'method':7s} {'rtol':>6s} {'status':>6s} {'steps':>8s} "
+           f"{'rejected':>8s} {'evals':>9s} {'time s':>7s} {'error':>9s} {'max|z|s0/fs':>11s}")
+    print(hdr)
+    print("-" * len(hdr))
+    for name in ("sigma0_1e4", "sigma0_1e6"):
+        if name not in REFS:
+            print(f"{name}: no reference in tests/hard/references.json "
+                  "(run scripts/reference_engine.py)")
+            continue
+        c, q_ref = REFS[name]["params"], np.array(REFS[name]["q"])
+        for method in ("rodas4", "dopri5"):
+            run(c, method, 1e-3, 10)                        # compile outside the timing
+            for rtol in rtols:
+                r = run(c, method, rtol, 50_000_000)
+                err = error_units(r.q, q_ref, c)
+                print(f"{c['sigma0']:7.0e} {method:7s} {rtol:6.0e} {r.status:6d} {r.steps:8d} "
+                      f"{r.rejected:8d} {r.evals:9d} {r.seconds:7.3f} {err:9.2e} "
+                      f"{r.z_max * c['sigma0'] / c['fs']:11.6f}", flush=True)
+
+
+# --------------------------------------------------------------------------- main
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeats", type=int, default=7, help="timing repeats (median)")
+    ap.add_argument("--methods", default="rk4,dopri5,rodas4", help="engine methods, comma-separated")
+    ap.add_argument("--no-scipy", action="store_true", help="skip the scipy comparison")
+    ap.add_argument("--scipy-cap", type=float, default=120.0, help="time cap per scipy run (s)")
+    ap.add_argument("--no-effects", action="store_true", help="skip the effects table")
+    ap.add_argument("--no-stiff", action="store_true", help="skip the stiff-contact table")
+    args = ap.parse_args(argv)
+    anchor = Anchor()
+    refs = read_references()
+    rows = table_speed(anchor, args.methods.split(","), refs, args.repeats)
+    print_speed(rows)
+    if not args.no_scipy:
+        eng = [r for r in rows if r["scene"] == "fig10" and r["acc"] == 1e-4 and "t" in r
+               and not r["method"].startswith("C ")]
+        best = min(eng, key=lambda r: r["t"])
+        table_scipy(best["t"], f"{best['method']} {best['setting']}", refs["fig10"], args.scipy_cap)
+    if not args.no_effects:
+        table_effects(args.repeats)
+    if not args.no_stiff:
+        table_stiff()
+
+
+if __name__ == "__main__":
+    main()

@@ -2,7 +2,7 @@
 
 Hairer & Wanner, *Solving ODEs II* (2nd ed., 1996), Sec. IV.7, Table 7.2 ("RODAS"),
 coefficients of their code ``rodas.f`` (METH = 1) with its third-order dense output.
-Six stages, one LU decomposition of ``I / (h gamma) - J`` per attempt, no Newton
+Six stages, one inversion of the small matrix ``I / (h gamma) - J`` per attempt, no Newton
 iteration. Why this method for ditherlab: the bristle equation for frozen ``u`` is
 linear in ``z``, ``dz = u - (sigma0 |u| / g(u)) z``, so the stiffness (rates up to
 ``sigma0 |u| / g ~ 1e6`` per unit tau) is exactly what a linearly implicit method treats
@@ -39,7 +39,7 @@ from .. import status as S
 from .events import make_locator
 from .problem import (CFG_ATOL, CFG_MAX_STEPS, CFG_RTOL, CTR_EVALS, CTR_REJECTED, CTR_STEPS,
                       FRESH_NONE, FRESH_START, Stepper, record_step)
-from .rosenbrock import (RosenbrockTableau, lu_factor, lu_solve, make_fd_jacobian,
+from .rosenbrock import (RosenbrockTableau, invert, make_fd_jacobian,
                          make_time_derivative)
 
 NAME = "rodas4"
@@ -82,19 +82,20 @@ W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP = 0, 1, 2, 3, 4
 
 
 def _make_attempt(tab, n, n_err, rhs):
-    """njit ``attempt(t, hh, y, f0, ft, tdep, LU, piv, p, sq, U, yt, yn) -> err``.
+    """njit ``attempt(t, hh, y, f0, ft, tdep, Minv, p, sq, U, yt, r, yn, rtol, atol) -> err``.
 
-    Stages of one step from ``(t, y)`` with ``f0 = f(t, y)`` and ``LU`` the factored
-    ``I / (hh gamma) - J``; writes ``U`` (stages) and ``yn`` (the order-4 solution).
+    Stages of one step from ``(t, y)`` with ``f0 = f(t, y)`` and ``Minv`` the inverse of
+    ``I / (hh gamma) - J``; writes ``U`` (stages) and ``yn`` (the order-4 solution);
+    ``yt``, ``r`` are scratch.
     """
     s = tab.stages
     A, C, c, d = tab.a.copy(), tab.C.copy(), tab.c.copy(), tab.d.copy()
     m, me = tab.m.copy(), tab.m_err.copy()
 
     @njit(error_model="numpy")
-    def attempt(t, hh, y, f0, ft, tdep, LU, piv, p, sq, U, yt, yn, rtol, atol):
+    def attempt(t, hh, y, f0, ft, tdep, Minv, p, sq, U, yt, r, yn, rtol, atol):
+        inv_h = 1.0 / hh
         for i in range(s):
-            r = U[i]
             if i == 0:
                 r[:] = f0
             else:
@@ -107,11 +108,15 @@ def _make_attempt(tab, n, n_err, rhs):
             for k in range(n):
                 acc = r[k]
                 for j in range(i):
-                    acc += (C[i, j] / hh) * U[j, k]
+                    acc += C[i, j] * inv_h * U[j, k]
                 if tdep:
                     acc += d[i] * hh * ft[k]
                 r[k] = acc
-            lu_solve(LU, piv, r)
+            for k in range(n):
+                acc = 0.0
+                for j in range(n):
+                    acc += Minv[k, j] * r[j]
+                U[i, k] = acc
         err = 0.0
         for k in range(n):
             acc, e = y[k], 0.0
@@ -217,23 +222,24 @@ def make_stepper(problem) -> Stepper:
 
     @njit(error_model="numpy")
     def alloc():
-        # U: stages; Y: yt, yn, ym, ytmp, f0, ft; Q: dense coefficients; G: event values at
-        # step start / end / scratch; J, LU: Jacobian and factors; state: W_* slots
-        return (np.zeros((s, n)), np.zeros((6, n)), np.zeros((3, n)), np.zeros((3, n_g)),
-                np.zeros((n, n)), np.zeros((n, n)), np.zeros(n, np.int64), np.zeros(5))
+        # U: stages; Y: yt, yn, ym, ytmp, f0, ft, r; Q: dense coefficients; G: event values
+        # at step start / end / scratch; J, M, Minv: Jacobian, scratch, inverse of
+        # I / (h gamma) - J; state: W_* slots
+        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((3, n_g)),
+                np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(5))
 
     @njit(error_model="numpy")
-    def factor(J, LU, piv, hh):
+    def factor(J, M, Minv, hh):
         for i in range(n):
             for j in range(n):
-                LU[i, j] = -J[i, j]
-            LU[i, i] += 1.0 / (hh * gamma)
-        return lu_factor(LU, piv)
+                M[i, j] = -J[i, j]
+            M[i, i] += 1.0 / (hh * gamma)
+        return invert(M, Minv)
 
     @njit(error_model="numpy")
     def restart(t0, t1, y, p, sq, fresh, work, rtol, atol):
         """Events at t0; at the first segment of a point or after a switch a new h."""
-        U, Y, Q, G, J, LU, piv, state = work
+        U, Y, Q, G, J, M, Minv, state = work
         if n_ev:
             events(t0, y, p, sq, G[0])
         rhs(t0, y, p, sq, Y[4])
@@ -251,16 +257,16 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
         """Factor and attempt one step of size hh from (t, y); err (inf if singular)."""
-        U, Y, Q, G, J, LU, piv, state = work
+        U, Y, Q, G, J, M, Minv, state = work
         ctr[CTR_EVALS] += s - 1
-        if not factor(J, LU, piv, hh):
+        if not factor(J, M, Minv, hh):
             return np.inf
-        return attempt(t, hh, y, Y[4], Y[5], state[W_TDEP] != 0.0, LU, piv, p, sq, U, Y[0],
-                       Y[1], rtol, atol)
+        return attempt(t, hh, y, Y[4], Y[5], state[W_TDEP] != 0.0, Minv, p, sq, U, Y[0],
+                       Y[6], Y[1], rtol, atol)
 
     @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
-        U, Y, Q, G, J, LU, piv, state = work
+        U, Y, Q, G, J, M, Minv, state = work
         yn, ym, ytmp, f0, ft = Y[1], Y[2], Y[3], Y[4], Y[5]
         rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]
         floor = atol / rtol if rtol > 0.0 else 1.0

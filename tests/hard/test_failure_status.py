@@ -1,0 +1,61 @@
+"""A run that cannot finish within its budget says so (status FAILED, outputs NaN): never a
+silent wrong number (engine.status; DESIGN.md §4 status codes)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from engine import params as P
+from engine import status as S
+from engine.batch import run_block
+from engine.scene import Scene
+from engine.settings import Settings
+
+from .hardcases import FIG10, run
+
+STIFF = {**FIG10, "sigma0": 1e6, "t_end": 5.0}
+
+
+@pytest.mark.parametrize("method", ["dopri5", "rodas4"])
+def test_tiny_step_budget_gives_failed_not_a_number(method):
+    r = run(FIG10, method, 1e-6, max_steps=10)
+    assert r.status == S.FAILED
+    assert r.steps + r.rejected <= 10
+    assert np.all(np.isnan(r.q))
+    assert all(np.isnan(v) for v in r.outputs.values()), r.outputs
+
+
+def test_explicit_method_on_the_stiff_case_fails_at_a_budget_the_stiff_one_meets():
+    """sigma0 = 1e6: DP5 is stability-bound (h < 3.3 g / (sigma0 |u|) ~ 4e-6) and needs
+    ~7e5 steps for 5 tau; with a budget of 1e5 it must report FAILED, while RODAS finishes
+    within the same budget."""
+    budget = 100_000
+    explicit = run(STIFF, "dopri5", 1e-4, max_steps=budget)
+    assert explicit.status == S.FAILED
+    assert np.all(np.isnan(explicit.q))
+    stiff = run(STIFF, "rodas4", 1e-4, max_steps=budget)
+    assert stiff.status == S.OK
+    assert np.all(np.isfinite(stiff.q))
+
+
+def test_block_marks_only_the_points_over_budget():
+    """run_block (the sweep entry point): a point that needs more steps than max_steps is
+    FAILED with NaN outputs; its neighbour in the same block is OK and finite."""
+    scene = Scene(method="dopri5", slow_force=False, outputs=("v_mean", "F_mean"))
+    p = P.pack(**{**FIG10, "t_end": 2.0})
+    # omega = 1e5 stops at 63662 switches in 2 tau, omega = 1e3 at 637
+    points = np.array([[0.4, 1e3, 0.4, 0.1], [0.4, 1e5, 0.4, 0.1]])
+    res = run_block(scene, points, p, Settings(rtol=1e-6, atol=1e-9, max_steps=20_000))
+    assert list(res.status) == [S.OK, S.FAILED]
+    assert np.all(np.isfinite([res.outputs[k][0] for k in res.outputs]))
+    assert np.all(np.isnan([res.outputs[k][1] for k in res.outputs]))
+
+
+@pytest.mark.parametrize("method", ["dopri5", "rodas4"])
+def test_blow_up_is_reported_not_returned(method):
+    """Negative bristle stiffness (refused by the spec layer, forced here) makes z grow like
+    exp(sigma0 |u| t / g): the engine must end with FAILED or NON_FINITE and NaN outputs."""
+    r = run({**FIG10, "sigma0": -100.0, "t_end": 5.0}, method, 1e-6, max_steps=200_000)
+    assert r.status in (S.FAILED, S.NON_FINITE), S.MEANINGS[r.status]
+    assert np.all(np.isnan(r.q))
+    assert all(np.isnan(v) for v in r.outputs.values())
