@@ -65,10 +65,10 @@ def friction(u, z, d, law):
 
 
 def slider_rhs(t, y, d, law, dither, sq):
-    """(e, v, z, Q) with dQ = F (DESIGN.md §1 slider)."""
+    """(e, v, z, Q, X) with dQ = F and dX = v (DESIGN.md §1 slider)."""
     u, f = interface(t, y, d, dither, sq)
     dz, F = friction(u, y[2], d, law)
-    return [d["v_ref"] - y[1], f - F, dz, F]
+    return [d["v_ref"] - y[1], f - F, dz, F, y[1]]
 
 
 def _kinks(d, law, dither, sq):
@@ -98,17 +98,24 @@ def _piece(fun, t0, t1, y, events):
     return y
 
 
-def slider(d: dict, law: str, dither: str, y0, t_end: float) -> np.ndarray:
-    """State (e, v, z, Q) of the slider at t_end, bristle laws or sliding static laws."""
-    y = np.array(list(y0) + [0.0], dtype=float)
+def slider(d: dict, law: str, dither: str, y0, t_end: float, stops=()):
+    """State (e, v, z, Q, X) of the slider at t_end (bristle laws, or sliding static laws);
+    with ``stops``, also the states at those instants, shape ``(len(stops), 5)``."""
+    y = np.array(list(y0) + [0.0, 0.0], dtype=float)
     hp = np.pi / d["omega"] if dither == "square-velocity" else t_end
-    k = 0
-    while k * hp < t_end:
-        t0, t1 = k * hp, min((k + 1) * hp, t_end)
+    grid = [k * hp for k in range(1, int(np.ceil(t_end / hp)))]
+    ts = sorted(set(grid) | {float(s) for s in stops} | {t_end})
+    at = {}
+    t = 0.0
+    for t_next in ts:
+        k = int(np.floor(t / hp + 1e-9)) if dither == "square-velocity" else 0
         sq = 1.0 if k % 2 == 0 else -1.0
-        fun = lambda t, yy, sq=sq: slider_rhs(t, yy, d, law, dither, sq)  # noqa: E731
-        y = _piece(fun, t0, t1, y, _kinks(d, law, dither, sq))
-        k += 1
+        fun = lambda tt, yy, sq=sq: slider_rhs(tt, yy, d, law, dither, sq)  # noqa: E731
+        y = _piece(fun, t, t_next, y, _kinks(d, law, dither, sq))
+        at[t_next] = y
+        t = t_next
+    if len(stops):
+        return y, np.array([at[float(s)] for s in stops])
     return y
 
 
