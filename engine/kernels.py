@@ -7,8 +7,9 @@ scene once. Recording steps (API only) is a run-time choice: an empty ``rec`` ar
 """
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from functools import cache
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -17,8 +18,17 @@ from . import params as P
 from . import status as S
 from .integrators import METHODS
 from .integrators.driver import make_solve
-from .integrators.problem import (CFG_ATOL, CFG_H_FREE, CFG_MAX_STEPS, CFG_RECORD_EVERY,
-                                  CFG_RTOL, CFG_SIZE, CFG_STEPS_PER_PERIOD, CTR_SIZE, Problem)
+from .integrators.problem import (
+    CFG_ATOL,
+    CFG_H_FREE,
+    CFG_MAX_STEPS,
+    CFG_RECORD_EVERY,
+    CFG_RTOL,
+    CFG_SIZE,
+    CFG_STEPS_PER_PERIOD,
+    CTR_SIZE,
+    Problem,
+)
 from .observables import make_observer
 from .settings import Settings
 from .systems import make_system
@@ -54,7 +64,7 @@ def method_module(scene):
                          f"known: {sorted(METHODS)} (or 'averaged', 'hbm')") from None
 
 
-@lru_cache(maxsize=None)
+@cache
 def point_kernel(scene) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``."""
     system = make_system(scene)
@@ -84,7 +94,7 @@ def point_kernel(scene) -> PointKernel:
     return PointKernel(system.n, observer.size, observer.names, stepper.alloc, run_point)
 
 
-@lru_cache(maxsize=None)
+@cache
 def block_kernel(scene) -> Callable:
     """njit ``run(points, p, cfg, out, status, counters)`` over a block of grid points.
 

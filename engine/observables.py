@@ -30,13 +30,14 @@ Definitions (``T = t_end - t_transient``):
 from __future__ import annotations
 
 import math
-from typing import Callable, NamedTuple
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from . import params as P
-from .dither import CODE, NONE, SQUARE_VELOCITY
+from .dither import CODE, NONE
 from .friction.elastoplastic import PRESLIDE, SLIDE, STICK
 from .outputs import SIMULATE
 

@@ -61,9 +61,23 @@ its module below and adding it to :data:`METHODS`; ``engine.kernels`` then build
 from __future__ import annotations
 
 from . import dopri5, rk4, rodas4
-from .problem import (CFG_ATOL, CFG_H, CFG_MAX_STEPS, CFG_RTOL, CFG_SIZE, CTR_EVALS,
-                      CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS, FRESH_NONE, FRESH_START,
-                      FRESH_SWITCH, Problem, Stepper)
+from .problem import (
+    CFG_ATOL,
+    CFG_H,
+    CFG_MAX_STEPS,
+    CFG_RTOL,
+    CFG_SIZE,
+    CTR_EVALS,
+    CTR_NREC,
+    CTR_REJECTED,
+    CTR_SIZE,
+    CTR_STEPS,
+    FRESH_NONE,
+    FRESH_START,
+    FRESH_SWITCH,
+    Problem,
+    Stepper,
+)
 
 #: name -> method module (see the protocol above)
 METHODS = {m.NAME: m for m in (rk4, dopri5, rodas4)}

@@ -28,8 +28,18 @@ from numba import njit
 
 from .. import status as S
 from .events import make_locator
-from .problem import (CFG_ATOL, CFG_MAX_STEPS, CFG_RTOL, CTR_EVALS, CTR_REJECTED, CTR_STEPS,
-                      FRESH_NONE, FRESH_START, Stepper, record_step)
+from .problem import (
+    CFG_ATOL,
+    CFG_MAX_STEPS,
+    CFG_RTOL,
+    CTR_EVALS,
+    CTR_REJECTED,
+    CTR_STEPS,
+    FRESH_NONE,
+    FRESH_START,
+    Stepper,
+    record_step,
+)
 from .tableau import ButcherTableau
 
 NAME = "dopri5"

@@ -23,8 +23,7 @@ from numba import njit
 from .. import params as P
 from .. import status as S
 from ..dither import CODE, NONE, SQUARE_VELOCITY, square_sign, switch_time
-from .problem import (CFG_H, CFG_H_FREE, CFG_STEPS_PER_PERIOD, FRESH_NONE, FRESH_START,
-                      FRESH_SWITCH)
+from .problem import CFG_H, CFG_H_FREE, CFG_STEPS_PER_PERIOD, FRESH_NONE, FRESH_START, FRESH_SWITCH
 
 
 def make_solve(stepper, observer, dither: str):

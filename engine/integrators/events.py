@@ -7,7 +7,6 @@ of the earliest event is found by the Illinois variant of regula falsi (Dowell &
 """
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 THETA_TOL = 1e-13   # bracket width on theta at which the root is taken

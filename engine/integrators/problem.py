@@ -5,7 +5,8 @@ See the protocol in :mod:`engine.integrators`.
 """
 from __future__ import annotations
 
-from typing import Any, Callable, NamedTuple
+from collections.abc import Callable
+from typing import Any, NamedTuple
 
 from numba import njit
 

@@ -15,8 +15,7 @@ import numpy as np
 from numba import njit
 
 from .. import status as S
-from .problem import (CFG_H, CFG_MAX_STEPS, CTR_EVALS, CTR_REJECTED, CTR_STEPS, Stepper,
-                      record_step)
+from .problem import CFG_H, CFG_MAX_STEPS, CTR_EVALS, CTR_REJECTED, CTR_STEPS, Stepper, record_step
 from .tableau import ButcherTableau
 
 NAME = "rk4"
@@ -55,7 +54,7 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         k1, k2, k3, k4, yt, y0, ym = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
-        m = max(1, int(math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12))))
+        m = max(1, math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12)))
         h = (t1 - t0) / m
         for j in range(m):
             t = t0 + j * h

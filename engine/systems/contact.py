@@ -80,7 +80,7 @@ def make_interface(scene):
     @njit(inline="always", error_model="numpy")
     def interface(t, y, p, sq):
         u = speed(t, p, sq)
-        dz, F, a = law(u, y[Z], 0.0, p)
+        _, F, a = law(u, y[Z], 0.0, p)
         return u, F, a
     return interface
 

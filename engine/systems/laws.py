@@ -21,7 +21,6 @@ drops ``sigma2 u``.
 """
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from .. import params as P

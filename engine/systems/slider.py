@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit
 
 from .. import params as P
-from ..dither import CODE, NONE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
+from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
 from .laws import make_kinks, make_law
 
 E, V, Z = 0, 1, 2
@@ -87,8 +87,8 @@ def make_interface(scene):
 
     @njit(inline="always", error_model="numpy")
     def interface(t, y, p, sq):
-        u, fext, hold = drive(t, y, p, sq)
-        dz, F, a = law(u, y[Z], hold, p)
+        u, _, hold = drive(t, y, p, sq)
+        _, F, a = law(u, y[Z], hold, p)
         return u, F, a
     return interface
 
@@ -100,7 +100,7 @@ def make_events(scene):
 
     @njit(error_model="numpy")
     def events(t, y, p, sq, g):
-        u, fext, hold = drive(t, y, p, sq)
+        u, _, hold = drive(t, y, p, sq)
         kinks(u, y[Z], hold, p, g)
     return n_events, events
 

@@ -110,7 +110,7 @@ def slider(d: dict, law: str, dither: str, y0, t_end: float, stops=()):
     for t_next in ts:
         k = int(np.floor(t / hp + 1e-9)) if dither == "square-velocity" else 0
         sq = 1.0 if k % 2 == 0 else -1.0
-        fun = lambda tt, yy, sq=sq: slider_rhs(tt, yy, d, law, dither, sq)  # noqa: E731
+        fun = lambda tt, yy, sq=sq: slider_rhs(tt, yy, d, law, dither, sq)
         y = _piece(fun, t, t_next, y, _kinks(d, law, dither, sq))
         at[t_next] = y
         t = t_next
@@ -127,11 +127,11 @@ def static_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarray, list
     the list of (start, end) sticking intervals.
     """
     fb = d["fs"] if law == "stribeck" else d["fc"]
-    hold = lambda t, e: e + d["slow_a"] * np.sin(d["slow_omega"] * t)  # noqa: E731
+    hold = lambda t, e: e + d["slow_a"] * np.sin(d["slow_omega"] * t)
     t, e, v, sticks = 0.0, 0.0, 0.0, []
     while t < t_end:
         # stick: e(t) = e + v_ref (t - t_s) until breakaway
-        brk = lambda tt, yy: abs(hold(tt, yy[0])) - fb  # noqa: E731
+        brk = lambda tt, yy: abs(hold(tt, yy[0])) - fb
         brk.terminal = True
         sol = solve_ivp(lambda tt, yy: [d["v_ref"]], (t, t_end), [e], events=brk,
                         method="DOP853", rtol=RTOL, atol=ATOL)
@@ -140,9 +140,12 @@ def static_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarray, list
         if t >= t_end:
             return np.array([e, 0.0]), sticks
         sgn = np.sign(hold(t, e))
-        rhs = lambda tt, yy: [d["v_ref"] - yy[1], hold(tt, yy[0])  # noqa: E731
-                              - friction(yy[1] if yy[1] != 0 else sgn * 1e-300, 0.0, d, law)[1]]
-        stop = lambda tt, yy: yy[1] if tt > t + NUDGE else sgn  # noqa: E731
+        def rhs(tt, yy, sgn=sgn):
+            vv = yy[1] if yy[1] != 0 else sgn * 1e-300   # slip starts in the sense of hold
+            return [d["v_ref"] - yy[1], hold(tt, yy[0]) - friction(vv, 0.0, d, law)[1]]
+
+        def stop(tt, yy, t=t, sgn=sgn):
+            return yy[1] if tt > t + NUDGE else sgn
         stop.terminal = True
         sol = solve_ivp(rhs, (t, t_end), [e, 0.0], events=stop, method="DOP853",
                         rtol=RTOL, atol=ATOL)

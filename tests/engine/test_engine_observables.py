@@ -46,8 +46,8 @@ def test_elastoplastic_stick_run_is_exact(t_tr, long_stick):
 
 
 @pytest.mark.parametrize("dither,kw", [
-    ("square-velocity", dict(W=0.3, omega=100.0)),
-    ("sine-force", dict(W=0.3, omega=100.0)),
+    ("square-velocity", {"W": 0.3, "omega": 100.0}),
+    ("sine-force", {"W": 0.3, "omega": 100.0}),
     ("none", {}),
 ])
 def test_window_means_and_period_average_match_reference(dither, kw):

@@ -18,21 +18,21 @@ from tests.engine import reference as R
 from tests.engine.common import scene
 
 T_END = 2.0
-SLOW = dict(slow_a=1.7, slow_omega=0.3)   # Sec. 7 slow force
+SLOW = {"slow_a": 1.7, "slow_omega": 0.3}   # Sec. 7 slow force
 CASES = [
     # law, dither, parameters, initial (e, v, z)
-    ("lugre", "none", dict(v_ref=0.4), (0, 0, 0)),
-    ("lugre", "square-velocity", dict(v_ref=0.4, W=0.3, omega=100.0), (0, 0, 0)),
-    ("lugre", "sine-velocity", dict(v_ref=0.4, W=0.3, omega=100.0), (0, 0, 0)),
-    ("lugre", "sine-force", dict(v_ref=0.4, W=0.3, omega=100.0), (0, 0, 0)),
+    ("lugre", "none", {"v_ref": 0.4}, (0, 0, 0)),
+    ("lugre", "square-velocity", {"v_ref": 0.4, "W": 0.3, "omega": 100.0}, (0, 0, 0)),
+    ("lugre", "sine-velocity", {"v_ref": 0.4, "W": 0.3, "omega": 100.0}, (0, 0, 0)),
+    ("lugre", "sine-force", {"v_ref": 0.4, "W": 0.3, "omega": 100.0}, (0, 0, 0)),
     ("elastoplastic", "none", dict(v_ref=0.1, **SLOW), (0, 0, 0)),
     ("elastoplastic", "square-velocity", dict(v_ref=0.1, W=0.5, omega=100.0, **SLOW), (0, 0, 0)),
     ("elastoplastic", "sine-velocity", dict(v_ref=0.1, W=1.5, omega=100.0, **SLOW), (0, 0, 0)),
     ("elastoplastic", "sine-force", dict(v_ref=0.1, W=0.5, omega=100.0, **SLOW), (0, 0, 0)),
-    ("stribeck", "square-velocity", dict(v_ref=0.5, W=0.2, omega=100.0), (1.2, 0.5, 0)),
-    ("stribeck", "sine-force", dict(v_ref=0.5, W=0.2, omega=100.0), (1.2, 0.5, 0)),
-    ("coulomb", "sine-velocity", dict(v_ref=0.5, W=0.2, omega=100.0), (1.0, 0.5, 0)),
-    ("coulomb", "none", dict(v_ref=0.5), (1.0, 0.5, 0)),
+    ("stribeck", "square-velocity", {"v_ref": 0.5, "W": 0.2, "omega": 100.0}, (1.2, 0.5, 0)),
+    ("stribeck", "sine-force", {"v_ref": 0.5, "W": 0.2, "omega": 100.0}, (1.2, 0.5, 0)),
+    ("coulomb", "sine-velocity", {"v_ref": 0.5, "W": 0.2, "omega": 100.0}, (1.0, 0.5, 0)),
+    ("coulomb", "none", {"v_ref": 0.5}, (1.0, 0.5, 0)),
 ]
 
 
