@@ -126,3 +126,19 @@ def test_unknown_sweep_and_bad_selection(tmp_path, spec_file):
     assert proc.returncode == 1 and "nonsense" in proc.stderr
     proc = ditherlab("query", "e2e-avg", "--sel", "W:0.1", store=store)
     assert proc.returncode == 1 and "AXIS=VALUE" in proc.stderr
+
+
+def test_harmonic_balance_sweep_fig1_loop_grows_then_shrinks(tmp_path):
+    """method = "hbm" through the service on the Sec. 3 contact model (Fig. 1 parameters):
+    the loop area first grows with frequency, then shrinks (Sec. 3, Fig. 1), and no point is
+    integrated in time."""
+    store = tmp_path / "store"
+    spec = load_spec("specs/fig01-hbm.toml")
+    ditherlab("submit", "specs/fig01-hbm.toml", "--quiet", store=store, check=True)
+    with xr.open_dataset(store / spec.sweep_id / "cube.h5", engine="h5netcdf") as ds:
+        assert ds["omega"].attrs["units"] == "rad/s"
+        assert (ds["status"] == 0).all() and int(ds["steps"].sum()) == 0
+        area = ds["loop_area"].squeeze().values
+    peak = int(np.argmax(area))
+    assert 0 < peak < len(area) - 1
+    assert area[peak] > 5 * area[0] and area[peak] > 100 * area[-1]
