@@ -1,28 +1,62 @@
 """Accuracy levels: what ``draft`` / ``standard`` / ``reference`` mean in numerics.
 
-A level names an integrator and its tolerances or step. The provisional table below is
-to be calibrated from the work-precision study (``scripts/work_precision.py``); every
-cube records the settings actually used in its attributes.
+A level names an integrator and its tolerances or step, calibrated by the work-precision
+study (``scripts/work_precision.py``, docs/ACCURACY.md): each level keeps the error of the
+queried outputs (relative; absolute for time fractions) under :data:`TARGET_ERROR` on the
+study's canonical scenes at the least measured cost. Every cube records the settings
+actually used in its attributes.
+
+Choice of integrator (:func:`numerics`):
+
+1. ``sigma0 >= STIFF_SIGMA0``: the stiff method with :data:`STIFF_LEVELS`;
+2. a (dither, level) pair of :data:`RK4_WHERE` whose fixed step is safely inside RK4's
+   stability region on the whole grid (:func:`rk4_fits`): RK4 with :data:`FIXED_STEPS`
+   steps per half-period (square wave) or the step :data:`FIXED_H` (no dither);
+3. otherwise DP5 with :data:`LEVELS`.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from engine.settings import Settings
 
 from .spec import ExplicitAccuracy, Spec
 
-# sigma0 from which the stiff integrator replaces explicit DP5 (bristle time scale
-# g / (sigma0 |u|) below ~1e-4 tau makes explicit steps stability-bound, not accuracy-bound)
-STIFF_SIGMA0 = 1e4
+# error each level promises in the queried outputs (relative; absolute for time fractions)
+TARGET_ERROR = {"draft": 1e-2, "standard": 1e-4, "reference": 1e-7}
+
+# sigma0 from which the stiff integrator replaces explicit DP5: measured crossover on
+# Fig. 10(d) (|u| <= 0.8, omega = 1000) between sigma0 = 1e4 (DP5 2-3x cheaper) and 1e5
+# (RODAS 2-6x cheaper at draft/standard), docs/ACCURACY.md "stiff crossover"
+STIFF_SIGMA0 = 3e4
 STIFF_METHOD = "rosenbrock"
 
+# DP5 (atol = 1e-3 rtol: states range from z ~ fc/sigma0 = 1e-2 to e ~ 1)
 LEVELS = {
-    "draft": dict(rtol=1e-4, atol=1e-7),
-    "standard": dict(rtol=1e-6, atol=1e-9),
-    "reference": dict(rtol=1e-9, atol=1e-12),
+    "draft": dict(rtol=1e-5, atol=1e-8),
+    "standard": dict(rtol=1e-8, atol=1e-11),
+    "reference": dict(rtol=1e-10, atol=1e-13),
 }
-FIXED_STEPS = {"draft": 2, "standard": 4, "reference": 16}
+# the stiff method (RODAS): loose tolerances leave the quenched v_slow_p2p wrong at
+# sigma0 = 1e6 (docs/ACCURACY.md), hence no rtol above 1e-7
+STIFF_LEVELS = {
+    "draft": dict(rtol=1e-7, atol=1e-10),
+    "standard": dict(rtol=1e-8, atol=1e-11),
+    "reference": dict(rtol=1e-10, atol=1e-13),
+}
+# RK4: steps per square-wave half-period (per period for a sine), and the step without
+# dither; errors on Fig. 10(d): N = 1: 1.3e-4, 4: 1.1e-5, 64: 2.4e-8; Fig. 10(a):
+# h = 1e-2: 2.9e-6, 5e-3: 5.9e-7, 1e-3: 2.8e-8
+FIXED_STEPS = {"draft": 1, "standard": 4, "reference": 64}
+FIXED_H = {"draft": 1e-2, "standard": 5e-3, "reference": 1e-3}
+# where RK4 beats DP5: square wave at draft (1.8x fewer evaluations on Fig. 10(d)); no
+# dither at reference (DP5 samples the velocity peaks of v_slow_p2p only at its step ends
+# and stalls near 3e-5 whatever rtol)
+RK4_WHERE = {"square-velocity": ("draft",), "none": ("reference",)}
+# RK4 only while h * sigma0 * u_max / fc <= this (the bristle relaxation rate, Eq. 2.3
+# linearised; u_max = 2 max|v_ref| + max W); Fig. 10(d) at N = 1 sits at 0.38
+RK4_MAX_H_LAMBDA = 0.5
 
 
 @dataclass(frozen=True)
@@ -43,6 +77,34 @@ def default_integrator(sigma0: float) -> str:
     return "dopri5"
 
 
+def _grid_extremes(spec: Spec) -> tuple[str, float, float, float]:
+    """(effective dither, max W, max |v_ref|, min omega) of the spec's grid."""
+    from . import grid
+
+    W = grid.axis_values(spec, "W")
+    dither = "none" if spec.dither == "none" or not W.any() else spec.dither
+    v_ref = grid.axis_values(spec, "v_ref")
+    omega = grid.axis_values(spec, "omega")
+    return dither, float(abs(W).max()), float(abs(v_ref).max()), float(omega.min())
+
+
+def rk4_fits(spec: Spec, sigma0: float, level: str) -> bool:
+    """True when RK4 at ``level`` is the calibrated choice for ``spec`` (module docstring)."""
+    dither, W_max, v_max, omega_min = _grid_extremes(spec)
+    if level not in RK4_WHERE.get(dither, ()) or spec.method != "simulate":
+        return False
+    if dither == "none":
+        h = FIXED_H[level]
+    elif omega_min > 0:
+        h = math.pi / omega_min / FIXED_STEPS[level]
+    else:
+        return False
+    from . import grid
+
+    fc = spec.params.fc or grid.system_defaults(spec.system)["fc"]
+    return h * sigma0 * (2.0 * v_max + W_max) / fc <= RK4_MAX_H_LAMBDA
+
+
 def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
     """Integrator and Settings for ``spec`` at its own accuracy or at ``level``."""
     acc = level or spec.accuracy
@@ -54,6 +116,9 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
             h=acc.step or base.h)
         return Numerics(acc.integrator, settings, "explicit")
     integrator = default_integrator(sigma0)
-    tol = LEVELS[acc]
-    settings = Settings(rtol=tol["rtol"], atol=tol["atol"], steps_per_period=FIXED_STEPS[acc])
+    if integrator == "dopri5" and rk4_fits(spec, sigma0, acc):
+        integrator = "rk4"
+    tol = STIFF_LEVELS[acc] if integrator == STIFF_METHOD else LEVELS[acc]
+    settings = Settings(rtol=tol["rtol"], atol=tol["atol"], steps_per_period=FIXED_STEPS[acc],
+                        h=FIXED_H[acc])
     return Numerics(integrator, settings, acc)
