@@ -100,6 +100,29 @@ def make_observer(scene, system) -> Observer:
                     hooks[3], finish)
 
 
+def _make_observe(interface, velocity, phases, hist, p2p_steps):
+    """The per-step hook: phase bookkeeping and/or step-end velocity extremes."""
+    if not (phases or p2p_steps):
+        # nothing is reduced per step: an empty hook the compiler removes (~6 % of a step)
+        @njit(inline="always", error_model="numpy")
+        def nothing(t0, y0, t1, y1, ymid, p, sq, obs):
+            pass
+        return nothing
+
+    @njit(inline="always", error_model="numpy")
+    def observe(t0, y0, t1, y1, ymid, p, sq, obs):
+        if obs[O_ON] == 0.0:
+            return
+        if phases:
+            _, _, a = interface(0.5 * (t0 + t1), ymid, p, sq)
+            _add_phase(obs, t0, t1, a, p[P.LONG_STICK], hist)
+        if p2p_steps:
+            v = velocity(t1, y1, p, sq)
+            obs[O_VMIN] = min(obs[O_VMIN], v)
+            obs[O_VMAX] = max(obs[O_VMAX], v)
+    return observe
+
+
 def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
     interface, position, velocity, qf = (system.interface, system.position,
                                          system.velocity, system.qf)
@@ -124,17 +147,7 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
             obs[O_VMIN] = v
             obs[O_VMAX] = v
 
-    @njit(inline="always", error_model="numpy")
-    def observe(t0, y0, t1, y1, ymid, p, sq, obs):
-        if obs[O_ON] == 0.0:
-            return
-        if phases:
-            _, _, a = interface(0.5 * (t0 + t1), ymid, p, sq)
-            _add_phase(obs, t0, t1, a, p[P.LONG_STICK], hist)
-        if p2p_steps:
-            v = velocity(t1, y1, p, sq)
-            obs[O_VMIN] = min(obs[O_VMIN], v)
-            obs[O_VMAX] = max(obs[O_VMAX], v)
+    observe = _make_observe(interface, velocity, phases, hist, p2p_steps)
 
     @njit(inline="always", error_model="numpy")
     def stop(t, y, p, is_period, obs):

@@ -77,7 +77,7 @@ def make_stepper(problem) -> Stepper:
             ctr[CTR_STEPS] += 1
             ctr[CTR_EVALS] += 4
             observe(t, y0, t_new, y, ym, p, sq, obs)
-            if record:
+            if record and rec.shape[0] > 0:
                 record_step(rec, ctr, cfg, t_new, y)
             if ctr[CTR_STEPS] + ctr[CTR_REJECTED] > cfg[CFG_MAX_STEPS]:
                 return S.FAILED
