@@ -27,7 +27,8 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
       marks a corner of the right-hand side (``|u| = 0``, elasto-plastic alpha boundaries,
       Karnopp band edges). Adaptive methods should step exactly onto them (see dopri5);
     - ``observe(t0, y0, t1, y1, ymid, p, sq, obs)``: call after every accepted step
-      (``ymid`` = state at ``(t0 + t1) / 2`` from the method's dense output);
+      (``ymid`` = state at ``(t0 + t1) / 2`` from the method's dense output; it is an
+      empty function when no observable needs per-step data);
     - ``record``: when True call ``record_step`` after each accepted step (it is a run-time
       no-op for the empty ``rec`` of the batch path);
     - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation).
@@ -36,7 +37,9 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
 
     ``work = alloc()``
         all scratch storage of one point (any numba-typable object, e.g. a tuple of arrays),
-        allocated once per point, reused by every segment: no allocation in the step loop.
+        allocated once per block and reused by every segment of every point: no allocation
+        in the step loop. Anything carried between segments (step size, FSAL stage) must be
+        re-initialised on ``FRESH_START``.
     ``status = segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec)``
         integrate ``y`` (float64 ``(n,)``, updated in place) from ``t0`` to *exactly* ``t1``:
         the last step ends at ``t = t1`` assigned, never accumulated. The dither sign ``sq``

@@ -13,7 +13,8 @@ Stops (DESIGN.md §1: "an integrator must step exactly onto them, never across t
 The fixed step of non-adaptive methods (``cfg[CFG_H]``) is set here per point:
 ``(pi / omega) / steps_per_period`` for a square wave (divides the half-period),
 ``(2 pi / omega) / steps_per_period`` for a sine (divides the period), ``Settings.h`` without
-dither (methods split each segment into ``ceil(length / h)`` equal steps).
+dither or without a finite positive omega (methods split each segment into
+``ceil(length / h)`` equal steps).
 """
 from __future__ import annotations
 
@@ -80,6 +81,8 @@ def make_solve(stepper, observer, dither: str):
 @njit(error_model="numpy")
 def _nominal_step(kind, omega, cfg):
     n = cfg[CFG_STEPS_PER_PERIOD]
+    if not omega > 0.0 or not np.isfinite(omega):   # no period to divide: Settings.h
+        return cfg[CFG_H_FREE]
     if kind == SQUARE_VELOCITY:
         return (np.pi / omega) / n
     if kind != NONE:
