@@ -43,16 +43,17 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "scripts"))
 
-from engine import params as P  # noqa: E402
-from engine import status as S  # noqa: E402
-from engine.batch import run_block  # noqa: E402
-from engine.settings import Settings  # noqa: E402
-from sweeps.plan import make_plan  # noqa: E402
-from sweeps.spec import LEVELS, parse_spec  # noqa: E402
+from engine import params as P
+from engine import status as S
+from engine.batch import run_block
+from engine.settings import Settings
+from sweeps.plan import make_plan
+from sweeps.spec import LEVELS, parse_spec
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "work_precision.json"
 ATOL_RATIO = 1e-3          # atol = ATOL_RATIO * rtol on the ladders (states ~1e-2 .. 1)
+MAX_STEPS = 10**9          # no ladder rung may fail for want of a step budget
 QUENCH_RATIO = 0.1         # Fig. 10 "quenched" when v_slow_p2p < QUENCH_RATIO * v_ref
 FIG10_W = (0.0, 0.2, 0.3, 0.4, 0.5, 0.6)   # Fig. 10 (a)-(f)
 
@@ -72,43 +73,43 @@ DP5_REF = ("dopri5", {"rtol": 1e-12, "atol": 1e-15})
 SCENES = {
     # Fig. 10(d): LuGre slider, square-velocity dither; window [50, 100] (the start-up from
     # rest would otherwise dominate v_slow_p2p).
-    "fig10": dict(
-        spec=_spec("fig10", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0),
-        queried=("v_slow_p2p", "F_mean", "v_mean"),
-        refs=[DP5_REF, ("rk4", {"steps_per_period": 512})]),
+    "fig10": {
+        "spec": _spec("fig10", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0),
+        "queried": ("v_slow_p2p", "F_mean", "v_mean"),
+        "refs": [DP5_REF, ("rk4", {"steps_per_period": 512})]},
     # Sec. 7 / Figs. 11-12: elasto-plastic, sine-velocity dither, slow force 1.7 sin(0.3 tau).
-    "sec7": dict(
-        spec=_spec("sec7", "elastoplastic", "sine-velocity", 1.5, 100.0, 0.1, 20.0,
+    "sec7": {
+        "spec": _spec("sec7", "elastoplastic", "sine-velocity", 1.5, 100.0, 0.1, 20.0,
                    {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}}),
-        queried=("v_slow_p2p", "F_mean", "v_mean", "stick_fraction", "presliding_fraction",
+        "queried": ("v_slow_p2p", "F_mean", "v_mean", "stick_fraction", "presliding_fraction",
                  "max_stick"),
         # DP5 at rtol 1e-12 stalls here (zero-length steps on an alpha kink at tau ~ 1.92)
-        refs=[("dopri5", {"rtol": 1e-11, "atol": 1e-14}),
+        "refs": [("dopri5", {"rtol": 1e-11, "atol": 1e-14}),
               ("rodas4", {"rtol": 1e-9, "atol": 1e-12}), ("rk4", {"steps_per_period": 4096}),
-              DP5_REF]),
+              DP5_REF]},
     # Fig. 10(a): the undithered stick-slip cycle (W = 0: the plan compiles dither "none").
-    "nodither": dict(
-        spec=_spec("nodither", "lugre", "square-velocity", 0.0, 1000.0, 0.4, 50.0),
-        queried=("v_slow_p2p", "F_mean", "v_mean"),
+    "nodither": {
+        "spec": _spec("nodither", "lugre", "square-velocity", 0.0, 1000.0, 0.4, 50.0),
+        "queried": ("v_slow_p2p", "F_mean", "v_mean"),
         # v_slow_p2p without dither is the peak-to-peak of v at the *step ends*: the
         # reference needs fine steps (RK4), an adaptive run samples the peaks coarsely
-        refs=[("rk4", {"h": 1e-5}), ("rk4", {"h": 4e-5}), DP5_REF]),
+        "refs": [("rk4", {"h": 1e-5}), ("rk4", {"h": 4e-5}), DP5_REF]},
     # Fig. 10(d) with a 100x stiffer bristle (sigma0 = 1e4): fast bristle relaxation.
-    "stiff": dict(
-        spec=_spec("stiff", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
+    "stiff": {
+        "spec": _spec("stiff", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
                    {"sigma0": 1e4}),
-        queried=("v_slow_p2p", "F_mean", "v_mean"),
-        refs=[DP5_REF, ("rk4", {"steps_per_period": 512})]),
+        "queried": ("v_slow_p2p", "F_mean", "v_mean"),
+        "refs": [DP5_REF, ("rk4", {"steps_per_period": 512})]},
     # sigma0 = 1e6 (tests/hard's stiff case): past the explicit/stiff crossover, calibrates
     # the stiff method's levels (sweeps.accuracy.STIFF_LEVELS).
-    "stiff6": dict(
-        spec=_spec("stiff6", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
+    "stiff6": {
+        "spec": _spec("stiff6", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
                    {"sigma0": 1e6}),
-        queried=("v_slow_p2p", "F_mean", "v_mean"),
-        refs=[DP5_REF, ("rodas4", {"rtol": 1e-10, "atol": 1e-13}),
+        "queried": ("v_slow_p2p", "F_mean", "v_mean"),
+        "refs": [DP5_REF, ("rodas4", {"rtol": 1e-10, "atol": 1e-13}),
               ("rk4", {"steps_per_period": 4096})],
-        ladders={"rk4": [{"steps_per_period": n} for n in (512, 1024, 2048)],
-                 "rodas4": [{"rtol": 10.0 ** -k} for k in range(2, 11)]}),
+        "ladders": {"rk4": [{"steps_per_period": n} for n in (512, 1024, 2048)],
+                 "rodas4": [{"rtol": 10.0 ** -k} for k in range(2, 11)]}},
 }
 
 LADDERS = {
@@ -133,6 +134,7 @@ def settings_of(setting: dict) -> Settings:
     s = dict(setting)
     if "rtol" in s:
         s.setdefault("atol", ATOL_RATIO * s["rtol"])
+    s.setdefault("max_steps", MAX_STEPS)
     return Settings(**s)
 
 
@@ -221,6 +223,7 @@ def study_scene(name: str, quick: bool, repeats: int) -> dict:
         for s in (steps[::2] if quick else steps):
             row = run_setting(plan, m, s, repeats)
             row["error"] = errors(row, refs[0], cfg["queried"])
+            row["is_reference"] = (m, s) == tuple(cfg["refs"][0])
             rows.append(row)
             print(f"  {m:7s} {row['label']:12s} err {row['error']['combined']:9.2e} "
                   f"t {1e3 * row['time']:9.2f} ms evals {row['evals']}", flush=True)

@@ -13,9 +13,8 @@ import re
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-import work_precision as wp  # noqa: E402
+import matplotlib.pyplot as plt
+import work_precision as wp
 
 DOC = wp.DOCS / "ACCURACY.md"
 COLORS = {"rk4": "tab:blue", "dopri5": "tab:orange", "rodas4": "tab:green"}
@@ -35,10 +34,15 @@ def _ms(t: float) -> str:
 def plot_scene(name: str, res: dict) -> str:
     """One log-log panel per queried output and one for their max; returns the file name."""
     panels = ["combined"] + res["queried"]
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 4.0), squeeze=False)
-    for ax, q in zip(axes[0], panels):
+    ncol = min(len(panels), 4)
+    nrow = math.ceil(len(panels) / ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.6 * ncol, 4.0 * nrow), squeeze=False)
+    for ax in axes.flat[len(panels):]:
+        ax.set_visible(False)
+    for ax, q in zip(axes.flat, panels):
         for m in wp.METHOD_ORDER:
-            rows = [r for r in res["runs"] if r["method"] == m and math.isfinite(r["error"][q])]
+            rows = [r for r in res["runs"] if r["method"] == m and math.isfinite(r["error"][q])
+                    and not r.get("is_reference")]
             if not rows:
                 continue
             xs = [1e3 * r["time"] for r in rows]
@@ -54,6 +58,9 @@ def plot_scene(name: str, res: dict) -> str:
         ax.set_ylabel("relative error" if q not in wp.FRACTIONS else "absolute error")
         ax.grid(True, which="major", alpha=0.3)
     axes[0][0].legend(fontsize=8)
+    fig.suptitle(f"{name}: error against the reference run vs wall time per point; "
+                 "points labelled by N (rk4 steps per (half-)period), h, or rtol; dashed: "
+                 "1e-2, 1e-4, 1e-7", fontsize=9)
     fig.tight_layout()
     fname = f"wp_{name}.png"
     fig.savefig(wp.DOCS / fname, dpi=110)
@@ -106,8 +113,9 @@ def refs_table(scenes: dict) -> str:
 def runs_table(res: dict) -> str:
     rows = []
     for r in res["runs"]:
+        err = "(= reference)" if r.get("is_reference") else _e(r["error"]["combined"])
         rows.append([r["method"], r["label"], _ms(r["time"]), r["steps"], r["rejected"],
-                     r["evals"], _e(r["error"]["combined"]),
+                     r["evals"], err,
                      *[_e(r["error"][q]) for q in res["queried"]]])
     return table(["method", "setting", "ms/point", "steps", "rejected", "evals", "error"]
                  + res["queried"], rows)
@@ -119,7 +127,8 @@ def cheapest_table(scenes: dict) -> str:
         for m in wp.METHOD_ORDER:
             cells = []
             for t in TARGETS:
-                ok = [r for r in res["runs"] if r["method"] == m and r["error"]["combined"] <= t]
+                ok = [r for r in res["runs"] if r["method"] == m and r["error"]["combined"] <= t
+                      and not r.get("is_reference")]
                 best = min(ok, key=lambda r: r["time"], default=None)
                 cells.append("not reached" if best is None
                              else f"{best['label']}: {_ms(best['time'])} ms")
@@ -164,6 +173,23 @@ def crossover_table(cross: dict) -> str:
     return table(["sigma0", "method"] + [f"error <= {t:.0e}" for t in TARGETS], rows)
 
 
+def crossover_levels_table(cross: dict, bounds: dict) -> str:
+    """Per sigma0 and level: DP5 at LEVELS against the stiff method at STIFF_LEVELS."""
+    rows = []
+    for s, e in cross.items():
+        for level, by_m in e.get("levels", {}).items():
+            cells = []
+            for m in ("dopri5", "rodas4"):
+                r = by_m[m]
+                flag = "" if r["error"]["combined"] <= bounds[level] else " (**over**)"
+                cells.append(f"{_e(r['error']['combined'])}{flag}, {_ms(r['time'])} ms")
+            t = {m: by_m[m]["time"] for m in by_m}
+            rows.append([s, level, *cells, f"{t['dopri5'] / t['rodas4']:.2f}"])
+    header = ["sigma0", "level", "dopri5 at LEVELS: error, time",
+              "rodas4 at STIFF_LEVELS: error, time", "time dopri5 / rodas4"]
+    return table(header, rows)
+
+
 def effects_table(effects: dict) -> str:
     out = []
     for m, e in effects.items():
@@ -201,7 +227,7 @@ def replace_section(text: str, name: str, body: str) -> str:
     block = f"{begin}\n{body}\n{end}"
     if begin in text:
         return re.sub(re.escape(begin) + r".*?" + re.escape(end), lambda _: block, text,
-                      flags=re.S)
+                      flags=re.DOTALL)
     return text + f"\n\n{block}\n"
 
 
@@ -223,6 +249,7 @@ def sections(data: dict) -> dict:
     if "crossover" in data:
         sec["crossover"] = (f"![crossover]({plot_crossover(data['crossover'])})\n\n"
                             + crossover_table(data["crossover"]))
+        sec["crossover-levels"] = crossover_levels_table(data["crossover"], TARGET_ERROR)
     if "effects" in data:
         sec["effects"] = effects_table(data["effects"])
     if "averaged" in data:

@@ -34,16 +34,16 @@ STIFF_METHOD = "rosenbrock"
 
 # DP5 (atol = 1e-3 rtol: states range from z ~ fc/sigma0 = 1e-2 to e ~ 1)
 LEVELS = {
-    "draft": dict(rtol=1e-5, atol=1e-8),
-    "standard": dict(rtol=1e-8, atol=1e-11),
-    "reference": dict(rtol=1e-10, atol=1e-13),
+    "draft": {"rtol": 1e-5, "atol": 1e-8},
+    "standard": {"rtol": 1e-8, "atol": 1e-11},
+    "reference": {"rtol": 1e-10, "atol": 1e-13},
 }
 # the stiff method (RODAS): loose tolerances leave the quenched v_slow_p2p wrong at
 # sigma0 = 1e6 (docs/ACCURACY.md), hence no rtol above 1e-7
 STIFF_LEVELS = {
-    "draft": dict(rtol=1e-7, atol=1e-10),
-    "standard": dict(rtol=1e-8, atol=1e-11),
-    "reference": dict(rtol=1e-10, atol=1e-13),
+    "draft": {"rtol": 1e-7, "atol": 1e-10},
+    "standard": {"rtol": 1e-8, "atol": 1e-11},
+    "reference": {"rtol": 1e-10, "atol": 1e-13},
 }
 # RK4: steps per square-wave half-period (per period for a sine), and the step without
 # dither; errors on Fig. 10(d): N = 1: 1.3e-4, 4: 1.1e-5, 64: 2.4e-8; Fig. 10(a):
