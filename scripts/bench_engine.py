@@ -2,8 +2,8 @@
 
 Run: ``.venv/bin/python scripts/bench_engine.py [--quick] [--no-scipy] [--scipy-cap S]``
 
-The machine is shared and noisy, so absolute times are only printed for context;
-what counts is the ratio to the C reference ``/work/shared/anchors/anchor.c``
+The machine is shared and noisy, so absolute times (thread CPU time, median of repeats) are
+only printed for context; what counts is the ratio to the C reference ``/work/shared/anchors/anchor.c``
 (see its README) compiled here at run time (``gcc -O3 -march=native``, into the
 gitignored ``scripts/_build/``) and timed in the same process through ctypes,
 interleaved with the engine runs (paired A/B timing, median of repeats).
@@ -102,13 +102,15 @@ class Anchor:
 
 # --------------------------------------------------------------------------- timing
 def paired_medians(fns, repeats: int) -> list[float]:
-    """Median wall time of each callable, the calls interleaved round-robin."""
+    """Median CPU time of the calling thread for each callable, the calls interleaved
+    round-robin (numba and the ctypes call into C both run in this thread; thread CPU time
+    is what the shared, oversubscribed machine distorts least)."""
     times = [[] for _ in fns]
     for _ in range(repeats):
         for i, fn in enumerate(fns):
-            t0 = time.perf_counter()
+            t0 = time.thread_time()
             fn()
-            times[i].append(time.perf_counter() - t0)
+            times[i].append(time.thread_time() - t0)
     return [float(np.median(t)) for t in times]
 
 

@@ -29,7 +29,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 TOL = 1e-12
 
@@ -141,91 +140,3 @@ class RosenbrockTableau:
         alpha, Gamma, b = original_form(self.gamma, self.a, self.C, self.m)
         s = self.stages
         return complex(1 + z * b @ np.linalg.solve(np.eye(s) - z * (alpha + Gamma), np.ones(s)))
-
-
-# --------------------------------------------------------------------------- kernels
-@njit(error_model="numpy")
-def invert(M, Minv):
-    """``Minv = M^-1`` by Gauss-Jordan elimination with partial pivoting (``M`` is destroyed).
-
-    For the small dense matrices of a Rosenbrock step (n <= 5) one explicit inverse per
-    attempt makes each of the ``s`` stage solves a matrix-vector product without a
-    dependency chain (measured 3x faster than LU forward/back substitution for n = 3).
-    Returns False when ``M`` is singular (a zero pivot).
-    """
-    n = M.shape[0]
-    for i in range(n):
-        for j in range(n):
-            Minv[i, j] = 1.0 if i == j else 0.0
-    for k in range(n):
-        pk, big = k, abs(M[k, k])
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > big:
-                pk, big = i, abs(M[i, k])
-        if big == 0.0:
-            return False
-        if pk != k:
-            for j in range(n):
-                M[k, j], M[pk, j] = M[pk, j], M[k, j]
-                Minv[k, j], Minv[pk, j] = Minv[pk, j], Minv[k, j]
-        d = 1.0 / M[k, k]
-        for j in range(n):
-            M[k, j] *= d
-            Minv[k, j] *= d
-        for i in range(n):
-            f = M[i, k]
-            if i != k and f != 0.0:
-                for j in range(n):
-                    M[i, j] -= f * M[k, j]
-                    Minv[i, j] -= f * Minv[k, j]
-    return True
-
-
-SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
-
-
-def make_fd_jacobian(n, n_err, rhs):
-    """njit ``jac(t, y, f0, p, sq, J, yt, ft, floor)``: forward-difference ``J = df/dy``.
-
-    Columns ``j < n_err`` with increment ``sqrt(eps) (|y_j| + floor)`` (``floor`` a magnitude
-    below which ``y_j`` is negligible, e.g. ``atol / rtol``); the other columns (quadrature
-    states, which nothing depends on) are zero. ``f0 = f(t, y)``; ``n_err`` evaluations.
-    """
-    @njit(error_model="numpy")
-    def jac(t, y, f0, p, sq, J, yt, ft, floor):
-        for k in range(n):
-            yt[k] = y[k]
-        for j in range(n_err):
-            yj = y[j]
-            yt[j] = yj + SQRT_EPS * (abs(yj) + floor)
-            delta = yt[j] - yj
-            rhs(t, yt, p, sq, ft)
-            for i in range(n):
-                J[i, j] = (ft[i] - f0[i]) / delta
-            yt[j] = yj
-        for j in range(n_err, n):
-            for i in range(n):
-                J[i, j] = 0.0
-    return jac
-
-
-def make_time_derivative(n, rhs):
-    """njit ``dfdt(t, y, f0, p, sq, hh, ft, yt) -> bool``: forward difference of ``f`` in ``t``.
-
-    Increment ``max(sqrt(eps) hh, 64 eps |t|)`` (small against the step, which resolves the
-    explicit time dependence, yet well above the rounding of ``t``). Returns True when
-    ``f`` changed at all, i.e. when it depends on ``t`` explicitly.
-    """
-    eps = float(np.finfo(float).eps)
-
-    @njit(error_model="numpy")
-    def dfdt(t, y, f0, p, sq, hh, ft, yt):
-        t2 = t + max(SQRT_EPS * hh, 64.0 * eps * abs(t))
-        delta = t2 - t
-        rhs(t2, y, p, sq, ft)
-        depends = False
-        for i in range(n):
-            ft[i] = (ft[i] - f0[i]) / delta
-            depends = depends or ft[i] != 0.0
-        return depends
-    return dfdt
