@@ -17,7 +17,7 @@ the constant ``square_sign(k)``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 KINDS = ("none", "square-velocity", "sine-velocity", "sine-force")
 NONE, SQUARE_VELOCITY, SINE_VELOCITY, SINE_FORCE = range(4)

@@ -12,7 +12,7 @@ from functools import cache
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 from . import params as P
 from . import status as S

@@ -34,7 +34,7 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from .jit import njit
 
 from . import params as P
 from .dither import CODE, NONE

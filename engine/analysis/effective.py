@@ -22,7 +22,7 @@ Eq. 5.20 with DESIGN.md's corrections, is :func:`sine_force_simplified`.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .. import params as P
 from .quadrature import (

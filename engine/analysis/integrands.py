@@ -21,7 +21,7 @@ only when a quadrature node sits exactly on ``u = 0`` -- the square wave at
 """
 from __future__ import annotations
 
-from numba import njit
+from ..jit import njit
 
 from ..friction.stribeck import g, sigma1
 

@@ -30,7 +30,7 @@ The averaged model is the ``omega -> infinity`` limit: omega does not enter.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .. import params as P
 from .effective import LUGRE, force_and_slope, law_vector

@@ -13,7 +13,7 @@ Eq. 2.7 is printed with z; DESIGN.md §1 fixes it to |z| so that the law is odd.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 STICK = 0
 PRESLIDE = 1

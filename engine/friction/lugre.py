@@ -10,7 +10,7 @@ For frozen ``u`` the z equation is linear, ``dz = u - k z`` with rate
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .stribeck import g
 

@@ -9,7 +9,7 @@ and the static (kinetic) friction model of Eq. 2.2 while sliding,
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 
 @njit(cache=True)

@@ -19,7 +19,7 @@ dither or without a finite positive omega (methods split each segment into
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .. import params as P
 from .. import status as S

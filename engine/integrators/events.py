@@ -7,7 +7,7 @@ of the earliest event is found by the Illinois variant of regula falsi (Dowell &
 """
 from __future__ import annotations
 
-from numba import njit
+from ..jit import njit
 
 THETA_TOL = 1e-13   # bracket width on theta at which the root is taken
 MAX_ITER = 60

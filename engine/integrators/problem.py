@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
-from numba import njit
+from ..jit import njit
 
 # cfg: float64 run-time settings of one point (no recompilation when they change)
 CFG_RTOL = 0        # relative tolerance (adaptive methods)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from ..jit import njit
 
 from .. import status as S
 from .problem import CFG_H, CFG_MAX_STEPS, CTR_EVALS, CTR_REJECTED, CTR_STEPS, Stepper, record_step

@@ -21,7 +21,7 @@ drops ``sigma2 u``.
 """
 from __future__ import annotations
 
-from numba import njit
+from ..jit import njit
 
 from .. import params as P
 from ..friction.elastoplastic import alpha as ep_alpha
