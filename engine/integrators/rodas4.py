@@ -118,7 +118,7 @@ def _make_attempt(tab, n, n_err, rhs):
     t2, t3, t4 = c[1], c[2], c[3]
     d1, d2, d3, d4 = d[0], d[1], d[2], d[3]
 
-    @njit(error_model="numpy", inline="always")
+    @njit(error_model="numpy")
     def solve(Minv, r, Ui):
         for k in range(n):
             acc = 0.0

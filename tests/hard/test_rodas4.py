@@ -7,6 +7,7 @@ solution.
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -99,7 +100,7 @@ def test_fd_jacobian_matches_the_analytic_one():
 
 
 def test_time_derivative_matches_the_analytic_one():
-    dfdt = make_time_derivative(3, _stiff_rhs)
+    dfdt = _kernels()[3]
     y, p = np.array([0.3, 2.0, 5.0]), np.array([10.0])
     ft, yt = np.empty(3), np.empty(3)
     # rounding error ~ eps^(2/3) |f| / hh (|f| ~ 5 here): its share of the local error,
@@ -111,11 +112,16 @@ def test_time_derivative_matches_the_analytic_one():
         assert ft[1] == 0.0 and ft[2] == 0.0
 
 
+@functools.lru_cache(maxsize=None)
+def _kernels():
+    """RODAS's stage, dense-output and difference kernels on the test problem (compiled once)."""
+    return (rodas4._make_attempt(TAB, 3, 3, _stiff_rhs), rodas4._make_dense(TAB, 3),
+            make_fd_jacobian(3, 3, _stiff_rhs), make_time_derivative(3, _stiff_rhs))
+
+
 def _fixed_step_error(n_steps, k=1e4, t_end=2.0):
     """Global error of RODAS with n equal steps on the stiff test problem (exact solution)."""
-    attempt = rodas4._make_attempt(TAB, 3, 3, _stiff_rhs)
-    jac = make_fd_jacobian(3, 3, _stiff_rhs)
-    dfdt = make_time_derivative(3, _stiff_rhs)
+    attempt, _, jac, dfdt = _kernels()
     p, y, h = np.array([k]), np.array([1.0, 1.0, 0.0]), t_end / n_steps
     U, yt, yn, f0, ft = np.empty((6, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     J, Minv, r = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
@@ -143,10 +149,7 @@ def test_convergence_order_4_on_a_nonautonomous_problem():
 
 def _dense_mid_error(h, k=1.0):
     """Error of the continuous extension at theta = 1/2 after one step of size h."""
-    attempt = rodas4._make_attempt(TAB, 3, 3, _stiff_rhs)
-    coeffs, dense_eval = rodas4._make_dense(TAB, 3)
-    jac = make_fd_jacobian(3, 3, _stiff_rhs)
-    dfdt = make_time_derivative(3, _stiff_rhs)
+    attempt, (coeffs, dense_eval), jac, dfdt = _kernels()
     p, y = np.array([k]), np.array([1.0, 1.0, 0.0])
     U, yt, yn, f0, ft = np.empty((6, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     J, Minv, r, Q, ym = (np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty((3, 3)),
