@@ -9,11 +9,11 @@ linear in ``z``, ``dz = u - (sigma0 |u| / g(u)) z``, so the stiffness (rates up 
 exactly; L-stability (``R(-inf) = 0``) damps the bristle transient after each square-wave
 switch instead of ringing, and the step is set by accuracy, not stability.
 
-- Jacobian: forward differences of ``problem.rhs`` over the ``n_err`` state columns
+- Jacobian: one-sided differences of ``problem.rhs`` over the ``n_err`` state columns
   (quadrature states never feed back: their columns are zero), increment
-  ``sqrt(eps) (|y_j| + atol / rtol)``; ``df/dt`` likewise, but only when the right-hand side
-  depends on ``t`` (tested once per point: a square wave is constant on a segment, so a
-  scene without slow force or sine dither skips it), by central differences. Cost per
+  ``sqrt(eps) (|y_j| + atol / rtol)`` directed away from kinks (event sign changes); ``df/dt`` likewise, but only when the right-hand side
+  depends on ``t`` (probed once per point at two states: a square wave is constant on a
+  segment, so a scene without slow force or sine dither skips it), by central differences. Cost per
   step: ``n_err + 1`` (+2) evaluations for ``J`` (and ``f_t``) and 5 for the stages.
 - Error: ``U_6`` (= ``y1 - y1_hat``), ``err = rms_i(U_6i / (atol + rtol max(|y_i|, |y1_i|)))``
   over the ``n_err`` leading components; accept when ``err <= 1``.
@@ -42,7 +42,7 @@ from .problem import (CFG_ATOL, CFG_MAX_STEPS, CFG_RTOL, CTR_EVALS, CTR_REJECTED
                       FRESH_NONE, FRESH_START, Stepper, record_step)
 from .rosenbrock import RosenbrockTableau
 from .rosenbrock_ops import (accept_divisor, invert, make_fd_jacobian, make_initial_step,
-                             make_time_derivative, step_divisor)
+                             make_time_derivative, make_time_probe, step_divisor)
 
 NAME = "rodas4"
 ORDER = 4
@@ -219,17 +219,18 @@ def make_stepper(problem) -> Stepper:
     attempt = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     initial_step = make_initial_step(n, n_err, rhs, ORDER)
-    jac = make_fd_jacobian(n, n_err, rhs)
-    dfdt = make_time_derivative(n, rhs)
+    jac = make_fd_jacobian(n, n_err, rhs, n_ev, events)
+    dfdt = make_time_derivative(n, rhs, n_ev, events)
+    depends_on_t = make_time_probe(n, n_err, rhs)
     locate = make_locator(events, n_ev, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(error_model="numpy")
     def alloc():
         # U: stages; Y: yt, yn, ym, ytmp, f0, ft, r; Q: dense coefficients; G: event values
-        # at step start / end / scratch; J, M, Minv: Jacobian, scratch, inverse of
+        # at step start / end / scratch x2; J, M, Minv: Jacobian, scratch, inverse of
         # I / (h gamma) - J; state: W_* slots
-        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((3, n_g)),
+        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((4, n_g)),
                 np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(6))
 
     @njit(error_model="numpy")
@@ -246,18 +247,14 @@ def make_stepper(problem) -> Stepper:
         U, Y, Q, G, J, M, Minv, state = work
         if n_ev:
             events(t0, y, p, sq, G[0])
-        rhs(t0, y, p, sq, Y[4])
         if fresh == FRESH_START:
-            rhs(t0 + 0.1234567, y, p, sq, Y[5])
-            state[W_TDEP] = 0.0
-            for i in range(n):
-                if Y[5, i] != Y[4, i]:
-                    state[W_TDEP] = 1.0
+            state[W_TDEP] = 1.0 if depends_on_t(t0, y, p, sq, Y[4], Y[5], Y[0]) else 0.0
+        rhs(t0, y, p, sq, Y[4])
         state[W_H] = initial_step(t0, y, Y[4], p, sq, Y[0], Y[5], rtol, atol, t1 - t0)
         state[W_REJ] = 0.0
         state[W_HOLD] = 0.0
         state[W_SHORT] = 0.0
-        return 3 if fresh == FRESH_START else 2
+        return 6 if fresh == FRESH_START else 2
 
     @njit(error_model="numpy")
     def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
@@ -311,10 +308,10 @@ def make_stepper(problem) -> Stepper:
         while t < t1:
             # Jacobian (and df/dt) at (t, y), kept through rejections of this step
             rhs(t, y, p, sq, f0)
-            jac(t, y, f0, p, sq, J, Y[0], ft, floor)
+            jac(t, y, f0, p, sq, J, Y[0], ft, floor, G[2], G[3])
             ctr[CTR_EVALS] += 1 + n_err
             if state[W_TDEP] != 0.0:
-                dfdt(t, y, p, sq, min(h, t1 - t), ft, Y[0])
+                dfdt(t, y, f0, p, sq, min(h, t1 - t), ft, Y[0], G[2], G[3])
                 ctr[CTR_EVALS] += 2
             while True:
                 rem = t1 - t

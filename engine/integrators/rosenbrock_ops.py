@@ -3,6 +3,7 @@
 - :func:`invert`: explicit inverse of the small matrix ``I / (h gamma) - J``;
 - :func:`make_fd_jacobian`, :func:`make_time_derivative`: ``df/dy`` and ``df/dt`` by finite
   differences of the problem's right-hand side (the method protocol gives no Jacobian);
+  :func:`make_time_probe` tells whether ``df/dt`` is needed at all;
 - :func:`make_initial_step`: starting step size (Hairer-Norsett-Wanner I, II.4);
 - :func:`step_divisor`, :func:`accept_divisor`: the step-size controller of Hairer's
   ``rodas.f`` (``h_new = h / fac``, ``fac`` in ``[1/6, 5]``, safety 0.9, Gustafsson's
@@ -58,20 +59,40 @@ def invert(M, Minv):
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 
 
-def make_fd_jacobian(n, n_err, rhs):
-    """njit ``jac(t, y, f0, p, sq, J, yt, ft, floor)``: forward-difference ``J = df/dy``.
+@njit(error_model="numpy")
+def _crossed(g0, g1, m):
+    """True if an event function changed sign between g0 and g1 (g0 == 0: at the kink, no)."""
+    for i in range(m):
+        if g0[i] * g1[i] < 0.0:
+            return True
+    return False
+
+
+def make_fd_jacobian(n, n_err, rhs, n_events, events):
+    """njit ``jac(t, y, f0, p, sq, J, yt, ft, floor, g0, g1)``: one-sided differences ``J = df/dy``.
 
     Columns ``j < n_err`` with increment ``sqrt(eps) (|y_j| + floor)`` (``floor`` a magnitude
     below which ``y_j`` is negligible, e.g. ``atol / rtol``); the other columns (quadrature
     states, which nothing depends on) are zero. ``f0 = f(t, y)``; ``n_err`` evaluations.
+    The increment goes *away* from a kink or discontinuity of ``f`` (a sign change of an
+    event function, ``g0``/``g1`` scratch): a difference across the Karnopp band edge is
+    ``jump / increment ~ 1e12`` and was measured to freeze the slider in a wrong stick, with
+    a small error estimate, since both embedded solutions share the Jacobian.
     """
     @njit(error_model="numpy")
-    def jac(t, y, f0, p, sq, J, yt, ft, floor):
+    def jac(t, y, f0, p, sq, J, yt, ft, floor, g0, g1):
         for k in range(n):
             yt[k] = y[k]
+        if n_events:
+            events(t, y, p, sq, g0)
         for j in range(n_err):
             yj = y[j]
-            yt[j] = yj + SQRT_EPS * (abs(yj) + floor)
+            step = SQRT_EPS * (abs(yj) + floor)
+            yt[j] = yj + step
+            if n_events:
+                events(t, yt, p, sq, g1)
+                if _crossed(g0, g1, n_events):
+                    yt[j] = yj - step
             delta = yt[j] - yj
             rhs(t, yt, p, sq, ft)
             for i in range(n):
@@ -83,28 +104,73 @@ def make_fd_jacobian(n, n_err, rhs):
     return jac
 
 
-def make_time_derivative(n, rhs):
-    """njit ``dfdt(t, y, p, sq, hh, ft, yt)``: central difference of ``f`` in ``t``.
+def make_time_derivative(n, rhs, n_events, events):
+    """njit ``dfdt(t, y, f0, p, sq, hh, ft, yt, g0, g1)``: ``df/dt`` by differences.
 
-    Increment ``delta = max(eps**(1/3) hh, 64 eps |t|)``: tied to the step, which resolves
-    the explicit time dependence (so the O(delta^2) truncation error is ~1e-11 relative),
-    yet well above the rounding of ``t``. A forward difference with ``sqrt(eps) hh`` was
-    measured to stall the step control at rtol 1e-9 (its rounding error, ``~ sqrt(eps) / hh``,
-    grows as the step shrinks). Two evaluations; ``yt`` is scratch.
+    Central, increment ``delta = max(eps**(1/3) hh, 64 eps |t|)``: tied to the step, which
+    resolves the explicit time dependence (so the O(delta^2) truncation error is ~1e-11
+    relative), yet well above the rounding of ``t``. A forward difference with
+    ``sqrt(eps) hh`` was measured to stall the step control at rtol 1e-9 (its rounding
+    error, ``~ sqrt(eps) / hh``, grows as the step shrinks). When ``t +- delta`` straddles a
+    kink (an event changes sign, e.g. the breakaway ``|hold| = f_break`` driven by the slow
+    force) it falls back to the one-sided difference on the clean side (``f0 = f(t, y)``).
+    Two evaluations; ``yt``, ``g0``, ``g1`` are scratch.
     """
     eps = float(np.finfo(float).eps)
     cbrt_eps = eps ** (1.0 / 3.0)
 
     @njit(error_model="numpy")
-    def dfdt(t, y, p, sq, hh, ft, yt):
+    def dfdt(t, y, f0, p, sq, hh, ft, yt, g0, g1):
         d = max(cbrt_eps * hh, 64.0 * eps * abs(t))
         t_hi, t_lo = t + d, t - d
         rhs(t_hi, y, p, sq, ft)
         rhs(t_lo, y, p, sq, yt)
-        inv = 1.0 / (t_hi - t_lo)
-        for i in range(n):
-            ft[i] = (ft[i] - yt[i]) * inv
+        hi_ok = lo_ok = True
+        if n_events:
+            events(t, y, p, sq, g0)
+            events(t_hi, y, p, sq, g1)
+            hi_ok = not _crossed(g0, g1, n_events)
+            events(t_lo, y, p, sq, g1)
+            lo_ok = not _crossed(g0, g1, n_events)
+        if hi_ok and lo_ok:
+            inv = 1.0 / (t_hi - t_lo)
+            for i in range(n):
+                ft[i] = (ft[i] - yt[i]) * inv
+        elif hi_ok:
+            inv = 1.0 / (t_hi - t)
+            for i in range(n):
+                ft[i] = (ft[i] - f0[i]) * inv
+        else:
+            inv = 1.0 / (t - t_lo)
+            for i in range(n):
+                ft[i] = (f0[i] - yt[i]) * inv
     return dfdt
+
+
+def make_time_probe(n, n_err, rhs):
+    """njit ``depends_on_t(t, y, p, sq, fa, fb, yt) -> bool``: does ``f`` depend on ``t``?
+
+    Compares ``f(t, .)`` with ``f(t + 0.1234567, .)`` at ``y`` *and* at a far-off state
+    ``y + 0.1 (1 + |y|)`` (error-controlled components): a single state can be blind, e.g.
+    a Karnopp stick band at rest, where the friction cancels the slow force exactly
+    (measured: a wrong answer at rtol 1e-8 when only ``y`` was probed). Four evaluations,
+    once per point; a non-finite probe counts as dependent. ``fa``, ``fb``, ``yt``: scratch.
+    """
+    @njit(error_model="numpy")
+    def depends_on_t(t, y, p, sq, fa, fb, yt):
+        for k in range(n):
+            yt[k] = y[k]
+        for probe in range(2):
+            if probe == 1:
+                for k in range(n_err):
+                    yt[k] = y[k] + 0.1 * (1.0 + abs(y[k]))
+            rhs(t, yt, p, sq, fa)
+            rhs(t + 0.1234567, yt, p, sq, fb)
+            for k in range(n):
+                if not fa[k] == fb[k]:      # also true for NaN
+                    return True
+        return False
+    return depends_on_t
 
 
 @njit(error_model="numpy")

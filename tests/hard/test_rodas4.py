@@ -90,11 +90,11 @@ def _stiff_rhs(t, y, p, sq, dy):
 
 
 def test_fd_jacobian_matches_the_analytic_one():
-    jac = make_fd_jacobian(3, 2, _stiff_rhs)   # third state: quadrature (zero column)
+    jac = make_fd_jacobian(3, 2, _stiff_rhs, 0, _no_events)   # third state: quadrature
     y, p = np.array([0.3, 2.0, 5.0]), np.array([1e6])
-    f0, J, yt, ft = np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3)
+    f0, J, yt, ft, G = np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(1)
     _stiff_rhs(0.7, y, p, 1.0, f0)
-    jac(0.7, y, f0, p, 1.0, J, yt, ft, 1.0)
+    jac(0.7, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
     exact = np.array([[-1e6, 0, 0], [2.0, 0.3, 0], [1.0, 0, 0]])
     np.testing.assert_allclose(J, exact, rtol=1e-6, atol=1e-6)
 
@@ -102,21 +102,28 @@ def test_fd_jacobian_matches_the_analytic_one():
 def test_time_derivative_matches_the_analytic_one():
     dfdt = _kernels()[3]
     y, p = np.array([0.3, 2.0, 5.0]), np.array([10.0])
-    ft, yt = np.empty(3), np.empty(3)
+    f0, ft, yt, G = np.empty(3), np.empty(3), np.empty(3), np.empty(1)
     # rounding error ~ eps^(2/3) |f| / hh (|f| ~ 5 here): its share of the local error,
     # d_i h^2 df_t ~ h eps^(2/3) |f|, is negligible at any step; a late t rounds t + delta
     for t, hh in ((0.7, 1e-2), (0.7, 1e-7), (1e4, 1e-5)):
-        dfdt(t, y, p, 1.0, hh, ft, yt)
+        _stiff_rhs(t, y, p, 1.0, f0)
+        dfdt(t, y, f0, p, 1.0, hh, ft, yt, G, G)
         tol = 1e-8 + 10 * np.finfo(float).eps ** (2 / 3) * 5 / hh
         assert ft[0] == pytest.approx(-10.0 * math.sin(t) - math.cos(t), abs=tol)
         assert ft[1] == 0.0 and ft[2] == 0.0
+
+
+@njit
+def _no_events(t, y, p, sq, g):
+    pass
 
 
 @functools.lru_cache(maxsize=None)
 def _kernels():
     """RODAS's stage, dense-output and difference kernels on the test problem (compiled once)."""
     return (rodas4._make_attempt(TAB, 3, 3, _stiff_rhs), rodas4._make_dense(TAB, 3),
-            make_fd_jacobian(3, 3, _stiff_rhs), make_time_derivative(3, _stiff_rhs))
+            make_fd_jacobian(3, 3, _stiff_rhs, 0, _no_events),
+            make_time_derivative(3, _stiff_rhs, 0, _no_events))
 
 
 def _fixed_step_error(n_steps, k=1e4, t_end=2.0):
@@ -124,12 +131,12 @@ def _fixed_step_error(n_steps, k=1e4, t_end=2.0):
     attempt, _, jac, dfdt = _kernels()
     p, y, h = np.array([k]), np.array([1.0, 1.0, 0.0]), t_end / n_steps
     U, yt, yn, f0, ft = np.empty((6, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    J, Minv, r = np.empty((3, 3)), np.empty((3, 3)), np.empty(3)
+    J, Minv, r, G = np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty(1)
     for i in range(n_steps):
         t = i * h
         _stiff_rhs(t, y, p, 1.0, f0)
-        jac(t, y, f0, p, 1.0, J, yt, ft, 1.0)
-        dfdt(t, y, p, 1.0, h, ft, yt)
+        jac(t, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
+        dfdt(t, y, f0, p, 1.0, h, ft, yt, G, G)
         invert(np.eye(3) / (h * TAB.gamma) - J, Minv)
         attempt(t, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, 1.0)
         y[:] = yn
@@ -154,9 +161,10 @@ def _dense_mid_error(h, k=1.0):
     U, yt, yn, f0, ft = np.empty((6, 3)), np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     J, Minv, r, Q, ym = (np.empty((3, 3)), np.empty((3, 3)), np.empty(3), np.empty((3, 3)),
                          np.empty(3))
+    G = np.empty(1)
     _stiff_rhs(0.0, y, p, 1.0, f0)
-    jac(0.0, y, f0, p, 1.0, J, yt, ft, 1.0)
-    dfdt(0.0, y, p, 1.0, h, ft, yt)
+    jac(0.0, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
+    dfdt(0.0, y, f0, p, 1.0, h, ft, yt, G, G)
     invert(np.eye(3) / (h * TAB.gamma) - J, Minv)
     attempt(0.0, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, 1.0)
     coeffs(y, yn, U, Q)
