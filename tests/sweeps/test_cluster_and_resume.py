@@ -30,12 +30,12 @@ def assert_same_results(a, b):
     xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
 
 
-def _wait_for(predicate, timeout, what):
+def _wait_for(predicate, timeout, what, poll=0.2):
     t0 = time.monotonic()
     while not predicate():
         if time.monotonic() - t0 > timeout:
             raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(0.2)
+        time.sleep(poll)
 
 
 def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
@@ -74,9 +74,12 @@ def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
     assert_same_results(results(local / cube), results(remote / cube))
 
 
+# 32 one-point blocks of ~0.1-0.3 s each: long enough to be killed mid-flight
 RESUME_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1").replace(
-    "t_end = 12.0", "t_end = 40.0").replace("W = [0.0, 0.2, 0.4, 0.6]",
-                                            "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]")
+    "t_end = 12.0", "t_end = 300.0").replace(
+    'accuracy = "draft"', 'accuracy = "standard"').replace(
+    "W = [0.0, 0.2, 0.4, 0.6]", "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]").replace(
+    "v_ref = [0.4]", "v_ref = [0.3, 0.4]")
 
 
 def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
@@ -87,9 +90,10 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
     proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(crashed)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True)
-    n_blocks = 16
+    n_blocks = 32
     done = lambda: len(list(journal.glob("*.npz"))) if journal.exists() else 0  # noqa: E731
-    _wait_for(lambda: done() >= 3 or proc.poll() is not None, 300, "three journaled blocks")
+    _wait_for(lambda: done() >= 3 or proc.poll() is not None, 300, "three journaled blocks",
+              poll=0.02)
     os.killpg(proc.pid, signal.SIGKILL)  # the submitter and its local cluster, mid-flight
     proc.wait()
     before = done()
