@@ -80,13 +80,15 @@ SCENES = {
     # Sec. 7 / Figs. 11-12: elasto-plastic, sine-velocity dither, slow force 1.7 sin(0.3 tau).
     "sec7": {
         "spec": _spec("sec7", "elastoplastic", "sine-velocity", 1.5, 100.0, 0.1, 20.0,
-                   {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}}),
+                      {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}}),
         "queried": ("v_slow_p2p", "F_mean", "v_mean", "stick_fraction", "presliding_fraction",
-                 "max_stick"),
-        # DP5 at rtol 1e-12 stalls here (zero-length steps on an alpha kink at tau ~ 1.92)
+                    "max_stick"),
+        # DP5 at rtol 1e-12 stalls here (zero-length steps on an alpha kink at tau ~ 1.92):
+        # shown with the service's default step budget
         "refs": [("dopri5", {"rtol": 1e-11, "atol": 1e-14}),
-              ("rodas4", {"rtol": 1e-9, "atol": 1e-12}), ("rk4", {"steps_per_period": 4096}),
-              DP5_REF]},
+                 ("rodas4", {"rtol": 1e-9, "atol": 1e-12}),
+                 ("rk4", {"steps_per_period": 4096}),
+                 ("dopri5", {**DP5_REF[1], "max_steps": Settings().max_steps})]},
     # Fig. 10(a): the undithered stick-slip cycle (W = 0: the plan compiles dither "none").
     "nodither": {
         "spec": _spec("nodither", "lugre", "square-velocity", 0.0, 1000.0, 0.4, 50.0),
@@ -97,19 +99,19 @@ SCENES = {
     # Fig. 10(d) with a 100x stiffer bristle (sigma0 = 1e4): fast bristle relaxation.
     "stiff": {
         "spec": _spec("stiff", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
-                   {"sigma0": 1e4}),
+                      {"sigma0": 1e4}),
         "queried": ("v_slow_p2p", "F_mean", "v_mean"),
         "refs": [DP5_REF, ("rk4", {"steps_per_period": 512})]},
     # sigma0 = 1e6 (tests/hard's stiff case): past the explicit/stiff crossover, calibrates
     # the stiff method's levels (sweeps.accuracy.STIFF_LEVELS).
     "stiff6": {
         "spec": _spec("stiff6", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
-                   {"sigma0": 1e6}),
+                      {"sigma0": 1e6}),
         "queried": ("v_slow_p2p", "F_mean", "v_mean"),
         "refs": [DP5_REF, ("rodas4", {"rtol": 1e-10, "atol": 1e-13}),
-              ("rk4", {"steps_per_period": 4096})],
+                 ("rk4", {"steps_per_period": 4096})],
         "ladders": {"rk4": [{"steps_per_period": n} for n in (512, 1024, 2048)],
-                 "rodas4": [{"rtol": 10.0 ** -k} for k in range(2, 11)]}},
+                    "rodas4": [{"rtol": 10.0 ** -k} for k in range(2, 11)]}},
 }
 
 LADDERS = {
@@ -288,6 +290,7 @@ def main(argv=None) -> None:
         return
     repeats = 1 if args.quick else args.repeats
     data = {"meta": {"quick": args.quick, "repeats": repeats, "atol_ratio": ATOL_RATIO,
+                     "engine": _engine_version(),
                      "date": time.strftime("%Y-%m-%d %H:%M"),
                      "loadavg": list(np.round(np.array(_loadavg()), 2))}, "scenes": {}}
     import work_precision_costs as costs
@@ -297,7 +300,8 @@ def main(argv=None) -> None:
                ("quench verdict", ("quench",), lambda: study_quench(repeats)),
                ("stiff crossover", ("crossover",), lambda: costs.study_crossover(args.quick))]
     if not args.no_effects:
-        stages += [("effects", ("effects",), lambda: costs.study_effects(repeats)),
+        stages += [("effects", ("effects",),
+                 lambda: costs.study_effects(max(repeats, costs.EFFECT_REPEATS))),
                    ("averaged path", ("averaged",), lambda: costs.study_averaged(repeats))]
     for title, key, fn in stages:
         print(title, flush=True)
@@ -307,6 +311,19 @@ def main(argv=None) -> None:
         target[key[-1]] = fn()
         RESULTS.write_text(json.dumps(data, indent=1, default=_json_default))  # partial
     report.write_all(data)
+
+
+def _engine_version() -> str:
+    """The commit of the engine/ sources this run used (and whether they were edited)."""
+    import subprocess
+    try:
+        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
+                             capture_output=True, text=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "engine"], cwd=ROOT, check=True,
+                               capture_output=True, text=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown (not a git checkout)"
+    return rev + (" + uncommitted engine edits" if dirty else "")
 
 
 def _loadavg():

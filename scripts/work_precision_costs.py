@@ -30,7 +30,7 @@ from engine.scene import Scene
 from engine.settings import Settings
 
 TARGETS = (1e-2, 1e-4, 1e-7)
-SIGMA0S = (1e2, 1e3, 1e4, 3e4, 1e5, 1e6)
+SIGMA0S = (1e2, 1e3, 1e4, 3e4, 1e5, 3e5, 1e6)
 CROSS_LADDER = {
     "rk4": [{"steps_per_period": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024,
                                               2048, 4096)],
@@ -164,7 +164,10 @@ def _row(name, variants, repeats):
     return row
 
 
-def study_effects(repeats: int, methods=("rk4", "dopri5")) -> dict:
+EFFECT_REPEATS = 7  # the effect ratios are small: more round-robin repeats than the ladders
+
+
+def study_effects(repeats: int = EFFECT_REPEATS, methods=("rk4", "dopri5")) -> dict:
     """The effect-cost table (module docstring) for each method of ``methods``."""
     out = {}
     for m in methods:

@@ -26,6 +26,10 @@ def _e(x: float) -> str:
     return "fail" if not math.isfinite(x) else ("0" if x == 0 else f"{x:.1e}")
 
 
+def _k(n: int) -> str:
+    return f"{n / 1e3:.0f}k" if n < 1e6 else f"{n / 1e6:.1f}M"
+
+
 def _ms(t: float) -> str:
     return f"{1e3 * t:.3g}"
 
@@ -130,8 +134,8 @@ def cheapest_table(scenes: dict) -> str:
                 ok = [r for r in res["runs"] if r["method"] == m and r["error"]["combined"] <= t
                       and not r.get("is_reference")]
                 best = min(ok, key=lambda r: r["time"], default=None)
-                cells.append("not reached" if best is None
-                             else f"{best['label']}: {_ms(best['time'])} ms")
+                cells.append("not reached" if best is None else
+                             f"{best['label']}: {_ms(best['time'])} ms, {_k(best['evals'])} ev")
             rows.append([name, m, *cells])
     return table(["scene", "method"] + [f"error <= {t:.0e}" for t in TARGETS], rows)
 
@@ -235,7 +239,8 @@ def sections(data: dict) -> dict:
     from sweeps.accuracy import TARGET_ERROR
     sc = data["scenes"]
     meta = data["meta"]
-    sec = {"meta": (f"Generated {meta['date']} ({'quick' if meta['quick'] else 'full'} run, "
+    sec = {"meta": (f"Generated {meta['date']} from engine {meta.get('engine', '?')} "
+                    f"({'quick' if meta['quick'] else 'full'} run, "
                     f"median of {meta['repeats']} repeat(s), load average at start "
                     f"{meta['loadavg']} on 2 cores shared with other jobs: absolute times "
                     f"are noisy, ratios within one table are the meaningful part)."),
