@@ -314,8 +314,12 @@ def main(argv=None) -> None:
 
 
 def _engine_version() -> str:
-    """The commit of the engine/ sources this run used (and whether they were edited)."""
+    """The commit of the engine/ sources this run used (and whether they were edited);
+    ``$WP_ENGINE_COMMIT`` names it for a run from an exported snapshot (``git archive``)."""
+    import os
     import subprocess
+    if os.environ.get("WP_ENGINE_COMMIT"):
+        return os.environ["WP_ENGINE_COMMIT"] + " (snapshot)"
     try:
         rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, check=True,
                              capture_output=True, text=True).stdout.strip()
