@@ -33,7 +33,6 @@ import argparse
 import ctypes
 import math
 import pathlib
-import re
 import subprocess
 import sys
 import time
@@ -258,7 +257,7 @@ def c_cheapest(anchor: Anchor, W: float, q_ref, acc: float) -> dict:
     """C method -> (setting, result, error) of its cheapest setting reaching ``acc``."""
     out = {}
     for cm in ("rk4", "dp5") + C_ONLY:
-        hit = cheapest(lambda s: anchor.run(cm, W, s), RK4_N if cm == "rk4" else RTOLS,
+        hit = cheapest(lambda s, cm=cm: anchor.run(cm, W, s), RK4_N if cm == "rk4" else RTOLS,
                        q_ref, acc)
         if hit is not None:
             out[cm] = hit
@@ -266,11 +265,11 @@ def c_cheapest(anchor: Anchor, W: float, q_ref, acc: float) -> dict:
 
 
 def speed_row(scene, acc, m, hit, t, ratio=None, ratio_same=None, vs_best=None):
-    q, steps, evals, rej = hit[1]
+    _, steps, evals, _ = hit[1]
     kind = "rk4" if m.endswith("rk4") else "adaptive"
-    return dict(scene=scene, acc=acc, method=m, setting=fmt_setting(kind, hit[0]), error=hit[2],
-                t=t, steps=steps, evals=evals, ns=1e9 * t / evals, ratio=ratio,
-                ratio_same=ratio_same, vs_best=vs_best)
+    return {"scene": scene, "acc": acc, "method": m, "setting": fmt_setting(kind, hit[0]),
+            "error": hit[2], "t": t, "steps": steps, "evals": evals, "ns": 1e9 * t / evals,
+            "ratio": ratio, "ratio_same": ratio_same, "vs_best": vs_best}
 
 
 def table_speed(anchor: Anchor, methods, refs, repeats: int):
@@ -286,16 +285,19 @@ def table_speed(anchor: Anchor, methods, refs, repeats: int):
     for scene, W in SCENES.items():
         for acc in ACCURACIES:
             c_hits = c_cheapest(anchor, W, refs[scene], acc)
-            c_fns = {cm: (lambda cm=cm, s=h[0]: anchor.run(cm, W, s)) for cm, h in c_hits.items()}
+            c_fns = {cm: (lambda cm=cm, s=h[0], W=W: anchor.run(cm, W, s))
+                     for cm, h in c_hits.items()}
             for m, eng in engines.items():
-                hit = cheapest(lambda s: eng.run(W, s), settings_for(m), refs[scene], acc)
+                hit = cheapest(lambda s, eng=eng, W=W: eng.run(W, s), settings_for(m),
+                               refs[scene], acc)
                 if hit is None:
-                    rows.append(dict(scene=scene, acc=acc, method=m, setting="not reached"))
+                    rows.append({"scene": scene, "acc": acc, "method": m,
+                                 "setting": "not reached"})
                     continue
                 fns = [eng.runner(W, hit[0])] + list(c_fns.values())
                 same = C_OF.get(m)
                 if same:
-                    fns.append(lambda s=hit[0], cm=same: anchor.run(cm, W, s))
+                    fns.append(lambda s=hit[0], cm=same, W=W: anchor.run(cm, W, s))
                 times = paired_medians(fns, repeats)
                 t_c = dict(zip(c_fns, times[1:1 + len(c_fns)]))
                 rows.append(speed_row(

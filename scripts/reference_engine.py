@@ -42,8 +42,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "tests" / "hard" / "references.json"
 
 #: The paper's Sec. 5.1 set (DESIGN.md §1), vd = 0.1, and the fig10 anchor scene.
-FIG10 = dict(sigma0=100.0, sigma1=10.0, sigma2=0.004, vs=0.1, vd=0.1, fc=1.0, fs=1.5,
-             W=0.4, omega=1000.0, v_ref=0.4, t_end=100.0)
+FIG10 = {"sigma0": 100.0, "sigma1": 10.0, "sigma2": 0.004, "vs": 0.1, "vd": 0.1, "fc": 1.0,
+         "fs": 1.5, "W": 0.4, "omega": 1000.0, "v_ref": 0.4, "t_end": 100.0}
 
 #: name -> (parameter overrides of FIG10, rtol of the reference)
 CASES = {

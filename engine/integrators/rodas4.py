@@ -1,48 +1,66 @@
 """RODAS: stiffly accurate, L-stable Rosenbrock method of order 4(3), for stiff contacts.
 
-Hairer & Wanner, *Solving ODEs II* (2nd ed., 1996), Sec. IV.7, Table 7.2 ("RODAS"),
-coefficients of their code ``rodas.f`` (METH = 1) with its third-order dense output.
-Six stages, one inversion of the small matrix ``I / (h gamma) - J`` per attempt, no Newton
-iteration. Why this method for ditherlab: the bristle equation for frozen ``u`` is
-linear in ``z``, ``dz = u - (sigma0 |u| / g(u)) z``, so the stiffness (rates up to
-``sigma0 |u| / g ~ 1e6`` per unit tau) is exactly what a linearly implicit method treats
-exactly; L-stability (``R(-inf) = 0``) damps the bristle transient after each square-wave
-switch instead of ringing, and the step is set by accuracy, not stability.
+Hairer & Wanner, *Solving ODEs II* (2nd ed., 1996), Sec. IV.7, Table 7.2 ("RODAS"):
+the coefficients of their code ``rodas.f`` (METH = 1) with its third-order dense output.
+Six stages and one inverse of the small matrix ``I / (h gamma) - J`` per attempt, no Newton
+iteration. Why it suits ditherlab: for frozen ``u`` the bristle equation
+``dz = u - (sigma0 |u| / g(u)) z`` is linear in ``z`` with rates up to
+``sigma0 |u| / g ~ 1e6`` per unit tau; a linearly implicit step is stable at any ``h`` for
+it, L-stability (``R(-inf) = 0``) damps the relaxation after each square-wave switch
+instead of ringing, so the step follows accuracy, not stability (explicit DP5 needs
+``h < 3.3 g / (sigma0 |u|)``).
 
 - Jacobian: one-sided differences of ``problem.rhs`` over the ``n_err`` state columns
-  (quadrature states never feed back: their columns are zero), increment
-  ``sqrt(eps) (|y_j| + atol / rtol)`` directed away from kinks (event sign changes); ``df/dt`` likewise, but only when the right-hand side
-  depends on ``t`` (probed once per point at two states: a square wave is constant on a
-  segment, so a scene without slow force or sine dither skips it), by central differences. Cost per
-  step: ``n_err + 1`` (+2) evaluations for ``J`` (and ``f_t``) and 5 for the stages.
-- Error: ``U_6`` (= ``y1 - y1_hat``), ``err = rms_i(U_6i / (atol + rtol max(|y_i|, |y1_i|)))``
-  over the ``n_err`` leading components; accept when ``err <= 1``.
+  (quadrature states never feed back: zero columns), increment
+  ``sqrt(eps) (|y_j| + atol / rtol)``, directed away from kinks (event sign changes).
+  ``df/dt`` by central differences, only when ``f`` depends on ``t`` (probed once per
+  point at two states; a square wave is constant on a segment). Per step: ``n_err + 1``
+  evaluations (+2 for ``df/dt``) and 5 for the stages.
+- Error: ``U_6 = y1 - y1_hat``, ``err = rms_i(U_6i / (atol + rtol max(|y_i|, |y1_i|)))`` over
+  the ``n_err`` leading components; accept when ``err <= 1``.
 - Step control: Gustafsson's predictive controller as in ``rodas.f``
-  (``h_new = h / fac``, ``fac`` in ``[1/6, 5]``, safety 0.9, no growth after a rejection).
+  (:mod:`engine.integrators.rosenbrock_ops`).
 - Stops, kinks, counters and status: as :mod:`engine.integrators.dopri5` (segments end
   exactly on ``t1``; a sign change of an event function inside an accepted step is located
-  on the dense output and the step retaken to end on it, the event muted for the next step
-  once reached or passed, found again if the landing fell short; ``FAILED`` past
-  ``cfg[CFG_MAX_STEPS]`` or on step-size underflow, ``NON_FINITE`` when it underflows
-  because the state blew up).
+  on the dense output and the step retaken to end on it; the event is muted for the next
+  step once reached or passed and found again if the landing fell short, at most
+  ``MAX_SHORT`` times in a row). ``FAILED`` past ``cfg[CFG_MAX_STEPS]`` or on step-size
+  underflow, ``NON_FINITE`` when it underflows because the state blew up.
 - After a square-wave switch the bristle state relaxes on the time scale
-  ``g / (sigma0 |u|)``; the step size is restarted there from the initial-step heuristic
-  (one evaluation) rather than cut down from the previous half-period's step by rejections.
+  ``g / (sigma0 |u|)``: the step restarts there from the initial-step heuristic (one
+  evaluation) rather than being cut down by rejections from the previous half-period's.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from ..jit import njit
 
 from .. import status as S
+from ..jit import njit
 from .events import make_locator
-from .problem import (CFG_ATOL, CFG_MAX_STEPS, CFG_RTOL, CTR_EVALS, CTR_REJECTED, CTR_STEPS,
-                      FRESH_NONE, FRESH_START, Stepper, record_step)
+from .problem import (
+    CFG_ATOL,
+    CFG_MAX_STEPS,
+    CFG_RTOL,
+    CTR_EVALS,
+    CTR_REJECTED,
+    CTR_STEPS,
+    FRESH_NONE,
+    FRESH_START,
+    Stepper,
+    record_step,
+)
 from .rosenbrock import RosenbrockTableau
-from .rosenbrock_ops import (accept_divisor, invert, make_fd_jacobian, make_initial_step,
-                             make_time_derivative, make_time_probe, step_divisor)
+from .rosenbrock_ops import (
+    accept_divisor,
+    invert,
+    make_fd_jacobian,
+    make_initial_step,
+    make_time_derivative,
+    make_time_probe,
+    step_divisor,
+)
 
 NAME = "rodas4"
 ORDER = 4
@@ -244,7 +262,7 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def restart(t0, t1, y, p, sq, fresh, work, rtol, atol):
         """Events at t0; at the first segment of a point or after a switch a new h."""
-        U, Y, Q, G, J, M, Minv, state = work
+        Y, G, state = work[1], work[3], work[7]
         if n_ev:
             events(t0, y, p, sq, G[0])
         if fresh == FRESH_START:
@@ -259,7 +277,7 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
         """Factor and attempt one step of size hh from (t, y); err (inf if singular)."""
-        U, Y, Q, G, J, M, Minv, state = work
+        U, Y, J, M, Minv, state = work[0], work[1], work[4], work[5], work[6], work[7]
         ctr[CTR_EVALS] += s - 1
         if not factor(J, M, Minv, hh):
             return np.inf
@@ -271,7 +289,7 @@ def make_stepper(problem) -> Stepper:
         """After an accepted trial of size hh: if an event changed sign, retake the step so
         that it ends on the earliest root (the trial counts as rejected), as dopri5 does.
         Returns (hh, err, retaken)."""
-        U, Y, Q, G, J, M, Minv, state = work
+        U, Y, Q, G, state = work[0], work[1], work[2], work[3], work[7]
         yn, ytmp = Y[1], Y[3]
         events(t + hh, yn, p, sq, G[1])
         if not _sign_change(G[0], G[1], n_ev):
@@ -297,8 +315,8 @@ def make_stepper(problem) -> Stepper:
 
     @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
-        U, Y, Q, G, J, M, Minv, state = work
-        yn, ym, ytmp, f0, ft = Y[1], Y[2], Y[3], Y[4], Y[5]
+        U, Y, Q, G, J, state = work[0], work[1], work[2], work[3], work[4], work[7]
+        yn, ym, f0, ft = Y[1], Y[2], Y[4], Y[5]
         rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]
         floor = atol / rtol if rtol > 0.0 else 1.0
         if fresh != FRESH_NONE:

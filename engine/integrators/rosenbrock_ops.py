@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+
 from ..jit import njit
 
 SAFETY, FAC_LO, FAC_HI = 0.9, 1.0 / 6.0, 5.0   # h_new = h / fac, fac in [FAC_LO, FAC_HI]
@@ -167,7 +168,7 @@ def make_time_probe(n, n_err, rhs):
             rhs(t, yt, p, sq, fa)
             rhs(t + 0.1234567, yt, p, sq, fb)
             for k in range(n):
-                if not fa[k] == fb[k]:      # also true for NaN
+                if fa[k] != fb[k]:      # also true for NaN
                     return True
         return False
     return depends_on_t

@@ -14,8 +14,7 @@ import numpy as np
 import pytest
 from numba import njit
 
-from engine.integrators import METHODS
-from engine.integrators import rodas4
+from engine.integrators import METHODS, rodas4
 from engine.integrators.rosenbrock import RosenbrockTableau
 from engine.integrators.rosenbrock_ops import invert, make_fd_jacobian, make_time_derivative
 
@@ -23,8 +22,8 @@ TAB = rodas4.TABLEAU
 
 
 def _kwargs(tab):
-    return dict(name="x", gamma=tab.gamma, a=tab.a, C=tab.C, c=tab.c, d=tab.d, m=tab.m,
-                m_hat=tab.m_hat, order=tab.order, error_order=tab.error_order)
+    return {"name": "x", "gamma": tab.gamma, "a": tab.a, "C": tab.C, "c": tab.c, "d": tab.d,
+            "m": tab.m, "m_hat": tab.m_hat, "order": tab.order, "error_order": tab.error_order}
 
 
 def test_registered_under_its_name_and_the_sweeps_alias():
@@ -118,7 +117,7 @@ def _no_events(t, y, p, sq, g):
     pass
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _kernels():
     """RODAS's stage, dense-output and difference kernels on the test problem (compiled once)."""
     return (rodas4._make_attempt(TAB, 3, 3, _stiff_rhs), rodas4._make_dense(TAB, 3),
