@@ -10,7 +10,7 @@ Prints, for one 1000-point simulated sweep (LuGre slider, square-velocity dither
 - T_dask1: the same on one worker, and the 2-core speed-up T_dask1 / T_dask2 (target >= 1.9).
 
 All three runs happen in this one process run, so the ratios compare like with like on a
-shared, noisy machine. Usage: ``python scripts/bench_sweep.py [--t-end 20]``.
+shared, noisy machine. Usage: ``python scripts/bench_sweep.py [--t-end 100]`` (run it on an otherwise idle machine).
 """
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def on_dask(plan, workers: int) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--t-end", type=float, default=20.0)
+    ap.add_argument("--t-end", type=float, default=100.0)
     args = ap.parse_args()
     spec = parse_spec(bench_spec(10, 10, 10, args.t_end))
     plan = make_plan(spec)
