@@ -3,7 +3,9 @@
 RODAS and DP5 are independent discretisations; at rtol 1e-9 every well-conditioned output
 (``v_mean``, ``F_mean``, ``v_slow_p2p``) must agree when both finish, and neither may
 return a number with a status other than OK (``FAILED`` is an honest answer). The phase
-fractions are left out on purpose: for LuGre, stick means ``|u| < stick_band`` (a set the
+fractions are left out on purpose, and so is ``v_slow_p2p`` without dither (there it is the
+peak-to-peak of ``v`` over the step ends, which depends on where each method puts its steps:
+measured 1.3e-5 relative between the two at rtol 1e-9). For LuGre, stick means ``|u| < stick_band`` (a set the
 trajectory crosses in an instant), and for the elasto-plastic law ``z`` approaches
 ``z_ss`` from below with ``alpha -> 1`` at zero slope, so ``alpha == 1`` (slip) is reached
 only through rounding or overshoot (measured: DP5 gives slip 0.06 / 0.07 / 0.30 at rtol
@@ -29,8 +31,9 @@ SLIDER = P.pack(v_ref=0.1, W=0.3, omega=50.0, t_end=20.0, slow_a=1.7, slow_omega
 CONTACT = P.pack(P.CONTACT_DEFAULTS, W=1e-3, v_ref=1e-3, omega=10.0, t_end=2.0,
                  t_transient=0.5)
 UNCONTROLLED = pytest.mark.xfail(
-    reason="contact + static law: no state under error control (z unused), the quadrature "
-           "of u and F is not error-controlled, steps grow unchecked (open, engine.systems)",
+    reason="contact + static law + sine: no state under error control (z unused), the "
+           "quadrature of u and F is not error-controlled, steps grow unchecked (measured "
+           "6.5 % on v_mean; open, engine.systems)",
     strict=False)
 
 
@@ -40,7 +43,8 @@ def _cases():
             ("none", "square-velocity", "sine-velocity", "sine-force")):
         if system == "contact" and dither == "sine-force":
             continue
-        marks = [UNCONTROLLED] if system == "contact" and friction == "stribeck" else []
+        uncontrolled = (system, friction, dither) == ("contact", "stribeck", "sine-velocity")
+        marks = [UNCONTROLLED] if uncontrolled else []
         yield pytest.param(system, friction, dither, marks=marks,
                            id=f"{system}-{friction}-{dither}")
 
@@ -60,5 +64,5 @@ def test_rodas4_agrees_with_dopri5(system, friction, dither):
             assert all(np.isnan(v) for v in r.outputs.values())
     a, b = runs["dopri5"], runs["rodas4"]
     if a.status == b.status == S.OK:
-        for name in OUTPUTS:
+        for name in OUTPUTS[:2] if dither == "none" else OUTPUTS:
             assert b.outputs[name] == pytest.approx(a.outputs[name], rel=1e-5, abs=1e-9), name
