@@ -292,7 +292,7 @@ def main(argv=None) -> None:
     data = {"meta": {"quick": args.quick, "repeats": repeats, "atol_ratio": ATOL_RATIO,
                      "engine": _engine_version(),
                      "date": time.strftime("%Y-%m-%d %H:%M"),
-                     "loadavg": list(np.round(np.array(_loadavg()), 2))}, "scenes": {}}
+                     "loadavg": [round(float(x), 2) for x in _loadavg()]}, "scenes": {}}
     import work_precision_costs as costs
     stages = [(f"scene {n}", ("scenes", n), lambda n=n: study_scene(n, args.quick, repeats))
               for n in args.scenes]
