@@ -63,6 +63,7 @@ layout / attrs
     ``SweepDir(store_root, sweep_id)``, ``default_store()``, ``atomic_write``;
     ``canonical_json``, ``decode_attr``.
 """
+
 from .attrs import canonical_json
 from .attrs import decode as decode_attr
 from .catalogue import STATES, Catalogue
@@ -85,17 +86,54 @@ from .cube import (
 from .journal import Journal, block_payload, fill_block, rebuild
 from .layout import SweepDir, atomic_write, default_store
 from .maps import friction_curves, stability_map, stick_slip_map
-from .query import NO_DATA, PU, STABLE, SU, effective_friction_curve, select, stability_chart, table, zone_map
+from .query import (
+    NO_DATA,
+    PU,
+    STABLE,
+    SU,
+    effective_friction_curve,
+    select,
+    stability_chart,
+    table,
+    zone_map,
+)
 
 __all__ = [
-    "AXES", "FAILED", "NON_FINITE", "NOT_COMPUTED", "OK", "STATUS_MEANINGS",
-    "empty_cube", "fill", "grid_points", "open_cube", "output_names", "pending_index", "publish",
+    "AXES",
+    "FAILED",
+    "NON_FINITE",
+    "NOT_COMPUTED",
+    "OK",
+    "STATUS_MEANINGS",
+    "empty_cube",
+    "fill",
+    "grid_points",
+    "open_cube",
+    "output_names",
+    "pending_index",
+    "publish",
     "status_counts",
-    "Journal", "block_payload", "fill_block", "rebuild",
-    "STATES", "Catalogue",
-    "NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select", "stability_chart", "table",
+    "Journal",
+    "block_payload",
+    "fill_block",
+    "rebuild",
+    "STATES",
+    "Catalogue",
+    "NO_DATA",
+    "PU",
+    "STABLE",
+    "SU",
+    "effective_friction_curve",
+    "select",
+    "stability_chart",
+    "table",
     "zone_map",
-    "friction_curves", "stability_map", "stick_slip_map",
-    "SweepDir", "atomic_write", "default_store",
-    "canonical_json", "decode_attr",
+    "friction_curves",
+    "stability_map",
+    "stick_slip_map",
+    "SweepDir",
+    "atomic_write",
+    "default_store",
+    "canonical_json",
+    "decode_attr",
 ]

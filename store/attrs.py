@@ -6,6 +6,7 @@ checked with h5netcdf 1.8) and cannot store dicts, lists of strings or ``None``.
 Every such value is therefore stored as a canonical JSON string (sorted keys, no
 spaces) — the same form as the sweep spec — and ``decode`` turns it back.
 """
+
 from __future__ import annotations
 
 import json
@@ -15,12 +16,12 @@ import numpy as np
 
 # Conventional global attributes of a cube (DESIGN.md §4). The caller supplies them;
 # store.cube fills CREATED, VERSION and CONVENTIONS when they are missing.
-SWEEP_ID = "sweep_id"          # the hash of the canonical spec
-NAME = "name"                  # the spec's human name
-SPEC = "spec"                  # the spec as canonical JSON
+SWEEP_ID = "sweep_id"  # the hash of the canonical spec
+NAME = "name"  # the spec's human name
+SPEC = "spec"  # the spec as canonical JSON
 VERSION = "ditherlab_version"  # package version that computed the cube
-CREATED = "created"            # UTC ISO-8601 creation time
-SETTINGS = "engine_settings"   # engine settings actually used (JSON)
+CREATED = "created"  # UTC ISO-8601 creation time
+SETTINGS = "engine_settings"  # engine settings actually used (JSON)
 CONVENTIONS = "Conventions"
 
 

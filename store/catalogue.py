@@ -16,6 +16,7 @@ States: ``queued`` (registered, nothing run), ``running``, ``partial`` (stopped
 with points still to compute), ``done`` (every point has a final status, maybe
 failed ones), ``failed`` (the run itself aborted).
 """
+
 from __future__ import annotations
 
 import os
@@ -113,7 +114,9 @@ class Catalogue:
             yield self._con
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(self.path, timeout=self.timeout_s, isolation_level=None, check_same_thread=False)
+        con = sqlite3.connect(
+            self.path, timeout=self.timeout_s, isolation_level=None, check_same_thread=False
+        )
         con.row_factory = sqlite3.Row
         con.execute(f"PRAGMA busy_timeout={int(self.timeout_s * 1000)}")
         # WAL + NORMAL: a commit survives a killed process (not a power cut) and costs no
@@ -125,7 +128,9 @@ class Catalogue:
         with self._connection() as con:
             return [dict(row) for row in con.execute(sql, args)]
 
-    def register(self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path) -> dict:
+    def register(
+        self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path
+    ) -> dict:
         """Add a sweep in state ``queued``, or refresh a known one (resubmission).
 
         ``path`` is the sweep's folder (``SweepDir.root``), as for adopted cubes.
@@ -134,9 +139,20 @@ class Catalogue:
         sizes and path are overwritten. Returns the row.
         """
         now = _now()
-        row = dict(sweep_id=str(sweep_id), name=str(name), state="queued", spec_json=str(spec_json),
-                   n_points=_count("n_points", n_points), n_blocks=_count("n_blocks", n_blocks),
-                   done_points=0, failed_points=0, done_blocks=0, path=str(path), created=now, updated=now)
+        row = dict(
+            sweep_id=str(sweep_id),
+            name=str(name),
+            state="queued",
+            spec_json=str(spec_json),
+            n_points=_count("n_points", n_points),
+            n_blocks=_count("n_blocks", n_blocks),
+            done_points=0,
+            failed_points=0,
+            done_blocks=0,
+            path=str(path),
+            created=now,
+            updated=now,
+        )
         with self._connection() as con:
             con.execute(_UPSERT, row)
         return self.get(sweep_id)
@@ -149,16 +165,23 @@ class Catalogue:
         """
         unknown = sorted(set(fields) - set(UPDATABLE))
         if unknown:
-            raise ValueError(f"Catalogue.update: unknown field(s) {unknown}; updatable: {UPDATABLE}")
+            raise ValueError(
+                f"Catalogue.update: unknown field(s) {unknown}; updatable: {UPDATABLE}"
+            )
         if "state" in fields and fields["state"] not in STATES:
-            raise ValueError(f"Catalogue.update: state must be one of {STATES}, got {fields['state']!r}")
+            raise ValueError(
+                f"Catalogue.update: state must be one of {STATES}, got {fields['state']!r}"
+            )
         for key in ("done_points", "failed_points", "done_blocks", "n_blocks"):
             if key in fields:
                 fields[key] = _count(key, fields[key])
         fields["updated"] = _now()
         assignments = ", ".join(f"{k} = :{k}" for k in fields)
         with self._connection() as con:
-            cur = con.execute(f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id", {**fields, "_id": sweep_id})
+            cur = con.execute(
+                f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id",
+                {**fields, "_id": sweep_id},
+            )
         if cur.rowcount == 0:
             raise LookupError(f"Catalogue.update: no sweep with id {sweep_id!r}; register it first")
         return self.get(sweep_id)
@@ -187,13 +210,17 @@ class Catalogue:
 
     def _match(self, key: str) -> dict | None:
         rows = self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
-        rows = rows or self._query("SELECT * FROM sweeps WHERE name = ? ORDER BY created DESC", (key,))
+        rows = rows or self._query(
+            "SELECT * FROM sweeps WHERE name = ? ORDER BY created DESC", (key,)
+        )
         if rows:
             return rows[0]
         rows = self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?", (len(key), key))
         if len(rows) > 1:
             ids = ", ".join(r["sweep_id"] for r in rows)
-            raise LookupError(f"id prefix {key!r} is ambiguous: it matches {ids}; type more characters")
+            raise LookupError(
+                f"id prefix {key!r} is ambiguous: it matches {ids}; type more characters"
+            )
         return rows[0] if rows else None
 
     def list(self) -> list[dict]:
@@ -233,10 +260,22 @@ def _row_from_cube(cube: Path) -> dict | None:
         return None
     failed = int(np.count_nonzero((status == FAILED) | (status == NON_FINITE)))
     pending = int(np.count_nonzero(status == NOT_COMPUTED))
-    created = attrs.get(A.CREATED) or datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat()
+    created = (
+        attrs.get(A.CREATED)
+        or datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat()
+    )
     spec = attrs.get(A.SPEC, "{}")
-    return dict(sweep_id=cube.parent.name, name=str(attrs.get(A.NAME, cube.parent.name)),
-                state="partial" if pending else "done",
-                spec_json=spec if isinstance(spec, str) else A.canonical_json(spec),
-                n_points=int(status.size), n_blocks=0, done_points=int(status.size) - pending, failed_points=failed,
-                done_blocks=0, path=str(cube.parent), created=str(created), updated=_now())
+    return dict(
+        sweep_id=cube.parent.name,
+        name=str(attrs.get(A.NAME, cube.parent.name)),
+        state="partial" if pending else "done",
+        spec_json=spec if isinstance(spec, str) else A.canonical_json(spec),
+        n_points=int(status.size),
+        n_blocks=0,
+        done_points=int(status.size) - pending,
+        failed_points=failed,
+        done_blocks=0,
+        path=str(cube.parent),
+        created=str(created),
+        updated=_now(),
+    )

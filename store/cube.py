@@ -16,6 +16,7 @@ flat indices into ``(n, 4)`` parameter rows in the column order of ``AXES``.
 On disk it is one HDF5/netCDF4 file written by ``publish`` (zlib, atomic rename) and
 readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
 """
+
 from __future__ import annotations
 
 import importlib.metadata
@@ -51,11 +52,15 @@ COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
 def _check_axis(name: str, values) -> np.ndarray:
     arr = np.asarray(values, dtype=np.float64)
     if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(f"coords[{name!r}] must be a non-empty 1-D list of numbers, got shape {arr.shape}")
+        raise ValueError(
+            f"coords[{name!r}] must be a non-empty 1-D list of numbers, got shape {arr.shape}"
+        )
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"coords[{name!r}] must be finite, got {arr.tolist()}")
     if np.unique(arr).size != arr.size:
-        raise ValueError(f"coords[{name!r}] has repeated values (drop the duplicates), got {arr.tolist()}")
+        raise ValueError(
+            f"coords[{name!r}] has repeated values (drop the duplicates), got {arr.tolist()}"
+        )
     return arr
 
 
@@ -63,7 +68,9 @@ def _axis_coords(coords, axis_units, axis_long_names) -> dict[str, xr.Variable]:
     unknown = set(coords) - set(AXES)
     missing = [a for a in AXES if a not in coords]
     if unknown or missing:
-        raise ValueError(f"coords must have exactly the axes {AXES}; missing {missing}, unknown {sorted(unknown)}")
+        raise ValueError(
+            f"coords must have exactly the axes {AXES}; missing {missing}, unknown {sorted(unknown)}"
+        )
     for label, override in (("axis_units", axis_units), ("axis_long_names", axis_long_names)):
         bad = set(override or {}) - set(AXES)
         if bad:
@@ -90,7 +97,10 @@ def _bookkeeping(shape: tuple[int, ...]) -> dict[str, xr.Variable]:
 
 
 def _global_attrs(attrs: Mapping | None) -> dict:
-    out = {A.CONVENTIONS: "CF-1.8", A.CREATED: datetime.now(timezone.utc).isoformat(timespec="seconds")}
+    out = {
+        A.CONVENTIONS: "CF-1.8",
+        A.CREATED: datetime.now(timezone.utc).isoformat(timespec="seconds"),
+    }
     try:
         out[A.VERSION] = importlib.metadata.version("ditherlab")
     except importlib.metadata.PackageNotFoundError:
@@ -133,10 +143,20 @@ def empty_cube(
     data = {}
     for name, meta in variables.items():
         if name in RESERVED:
-            raise ValueError(f"variables: {name!r} is a reserved name ({sorted(RESERVED)}); rename the output")
-        if not (isinstance(meta, (tuple, list)) and len(meta) == 2 and all(isinstance(m, str) for m in meta)):
-            raise ValueError(f"variables[{name!r}] must be (long_name, units) strings, got {meta!r}")
-        data[name] = xr.Variable(AXES, np.full(shape, np.nan), {"long_name": meta[0], "units": meta[1]})
+            raise ValueError(
+                f"variables: {name!r} is a reserved name ({sorted(RESERVED)}); rename the output"
+            )
+        if not (
+            isinstance(meta, (tuple, list))
+            and len(meta) == 2
+            and all(isinstance(m, str) for m in meta)
+        ):
+            raise ValueError(
+                f"variables[{name!r}] must be (long_name, units) strings, got {meta!r}"
+            )
+        data[name] = xr.Variable(
+            AXES, np.full(shape, np.nan), {"long_name": meta[0], "units": meta[1]}
+        )
     data.update(_bookkeeping(shape))
     return xr.Dataset(data, coords=axes, attrs=_global_attrs(attrs))
 
@@ -156,10 +176,14 @@ def check_index(ds: xr.Dataset, flat_index) -> np.ndarray:
     idx = np.asarray(flat_index)
     size = int(np.prod(shape_of(ds)))
     if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
-        raise ValueError(f"flat_index must be a 1-D integer array, got dtype {idx.dtype} shape {idx.shape}")
+        raise ValueError(
+            f"flat_index must be a 1-D integer array, got dtype {idx.dtype} shape {idx.shape}"
+        )
     if idx.size and (idx.min() < 0 or idx.max() >= size):
-        raise ValueError(f"flat_index must lie in [0, {size}) for a cube of shape {shape_of(ds)}, "
-                         f"got range [{idx.min()}, {idx.max()}]")
+        raise ValueError(
+            f"flat_index must lie in [0, {size}) for a cube of shape {shape_of(ds)}, "
+            f"got range [{idx.min()}, {idx.max()}]"
+        )
     return idx.astype(np.int64)
 
 
@@ -181,7 +205,9 @@ def pending_index(ds: xr.Dataset) -> np.ndarray:
 
 def status_counts(ds: xr.Dataset) -> dict[str, int]:
     """Number of points per status meaning, e.g. ``{"ok": 90, "not_yet_computed": 10, ...}``."""
-    counts = np.bincount(ds["status"].values.reshape(-1).astype(np.int64), minlength=len(STATUS_MEANINGS))
+    counts = np.bincount(
+        ds["status"].values.reshape(-1).astype(np.int64), minlength=len(STATUS_MEANINGS)
+    )
     return {m: int(c) for m, c in zip(STATUS_MEANINGS, counts)}
 
 
@@ -189,7 +215,9 @@ def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarra
     outputs = output_names(ds)
     missing, extra = sorted(set(outputs) - set(values)), sorted(set(values) - set(outputs))
     if missing or extra:
-        raise ValueError(f"fill: values must have exactly the cube's outputs {outputs}; missing {missing}, unknown {extra}")
+        raise ValueError(
+            f"fill: values must have exactly the cube's outputs {outputs}; missing {missing}, unknown {extra}"
+        )
     columns = {**values, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
     columns = {k: np.asarray(v) for k, v in columns.items()}
     for name, col in columns.items():
@@ -197,11 +225,15 @@ def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarra
             raise ValueError(f"fill: {name} has shape {col.shape}, expected ({n},) like flat_index")
     bad = ~np.isin(columns["status"], np.arange(len(STATUS_MEANINGS)))
     if bad.any():
-        raise ValueError(f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got {np.unique(columns['status'][bad]).tolist()}")
+        raise ValueError(
+            f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got {np.unique(columns['status'][bad]).tolist()}"
+        )
     return columns
 
 
-def fill(ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals) -> None:
+def fill(
+    ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
+) -> None:
     """Write the results of some points into ``ds`` in place.
 
     Parameters
@@ -228,8 +260,10 @@ def fill(ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, c
 
 def _check_layout(ds: xr.Dataset, where: str) -> None:
     if set(ds.dims) != set(AXES) or "status" not in ds or any(a not in ds.coords for a in AXES):
-        raise ValueError(f"{where}: not a ditherlab cube: dims {tuple(ds.dims)} (expected {AXES}), "
-                         f"variables {list(ds.data_vars)} (expected 'status' among them)")
+        raise ValueError(
+            f"{where}: not a ditherlab cube: dims {tuple(ds.dims)} (expected {AXES}), "
+            f"variables {list(ds.data_vars)} (expected 'status' among them)"
+        )
     for name, var in ds.data_vars.items():
         if var.dims != AXES:
             raise ValueError(f"{where}: variable {name!r} has dims {var.dims}, expected {AXES}")
@@ -240,7 +274,9 @@ def _encoding(ds: xr.Dataset) -> dict[str, dict]:
     for name, var in ds.data_vars.items():
         enc[name] = dict(COMPRESSION)
         if np.issubdtype(var.dtype, np.integer):
-            enc[name]["_FillValue"] = None  # with a fill value xarray decodes int8 as float (pydata/xarray#1576)
+            enc[name]["_FillValue"] = (
+                None  # with a fill value xarray decodes int8 as float (pydata/xarray#1576)
+            )
     return enc
 
 
@@ -258,7 +294,9 @@ def publish(ds: xr.Dataset, path) -> Path:
         var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
     if path.parent.exists():
         remove_stale_temps(path.parent)
-    return atomic_write(path, lambda tmp: out.to_netcdf(tmp, engine="h5netcdf", encoding=_encoding(out)))
+    return atomic_write(
+        path, lambda tmp: out.to_netcdf(tmp, engine="h5netcdf", encoding=_encoding(out))
+    )
 
 
 def open_cube(path) -> xr.Dataset:
@@ -279,7 +317,9 @@ def open_cube(path) -> xr.Dataset:
         with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
             ds = f.load()
     except (OSError, KeyError, ValueError) as err:  # h5py reports a torn file as KeyError/OSError
-        raise ValueError(f"the cube at {path} is unreadable ({err}); submit the spec again to "
-                         f"republish it from the journal") from err
+        raise ValueError(
+            f"the cube at {path} is unreadable ({err}); submit the spec again to "
+            f"republish it from the journal"
+        ) from err
     _check_layout(ds, f"open_cube({path})")
     return ds

@@ -22,6 +22,7 @@ evals      int64    right-hand-side evaluations per point
 
 ``block_payload`` builds it from the same arguments as ``store.cube.fill``.
 """
+
 from __future__ import annotations
 
 import re
@@ -36,16 +37,32 @@ import xarray as xr
 from .cube import fill
 from .layout import atomic_write, remove_stale_temps
 
-FIELDS = {"index": np.int64, "status": np.int8, "cost_s": np.float64, "steps": np.int64, "evals": np.int64}
+FIELDS = {
+    "index": np.int64,
+    "status": np.int8,
+    "cost_s": np.float64,
+    "steps": np.int64,
+    "evals": np.int64,
+}
 _NAME = re.compile(r"^block-(\d+)\.npz$")
 
 
-def block_payload(flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals) -> dict[str, np.ndarray]:
+def block_payload(
+    flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
+) -> dict[str, np.ndarray]:
     """A journal payload from the arguments of ``store.cube.fill`` (see module doc)."""
-    payload = {"index": flat_index, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
+    payload = {
+        "index": flat_index,
+        "status": status,
+        "cost_s": cost_s,
+        "steps": steps,
+        "evals": evals,
+    }
     clash = sorted(set(values) & set(payload))
     if clash:
-        raise ValueError(f"block_payload: output names {clash} clash with the journal's own fields {sorted(FIELDS)}")
+        raise ValueError(
+            f"block_payload: output names {clash} clash with the journal's own fields {sorted(FIELDS)}"
+        )
     payload.update(values)
     return _checked(payload)
 
@@ -53,7 +70,9 @@ def block_payload(flat_index, values: Mapping[str, np.ndarray], status, cost_s, 
 def _checked(payload: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
     missing = [k for k in FIELDS if k not in payload]
     if missing:
-        raise ValueError(f"journal payload lacks {missing}; build it with store.journal.block_payload")
+        raise ValueError(
+            f"journal payload lacks {missing}; build it with store.journal.block_payload"
+        )
     out = {k: np.asarray(v, dtype=FIELDS.get(k, np.float64)) for k, v in payload.items()}
     n = out["index"].shape
     bad = {k: v.shape for k, v in out.items() if v.ndim != 1 or v.shape != n}
@@ -130,7 +149,9 @@ def _readable(path: Path) -> bool:
         with zipfile.ZipFile(path) as z:
             names = {n.removesuffix(".npy") for n in z.namelist()}
     except (OSError, zipfile.BadZipFile) as err:
-        warnings.warn(f"journal: ignoring unreadable block file {path} ({err}); it will be recomputed")
+        warnings.warn(
+            f"journal: ignoring unreadable block file {path} ({err}); it will be recomputed"
+        )
         return False
     if not set(FIELDS) <= names:
         warnings.warn(f"journal: ignoring {path}: fields {sorted(set(FIELDS) - names)} are missing")
@@ -141,7 +162,15 @@ def _readable(path: Path) -> bool:
 def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
     """``store.cube.fill`` from a journal payload."""
     values = {k: v for k, v in payload.items() if k not in FIELDS}
-    fill(ds, payload["index"], values, payload["status"], payload["cost_s"], payload["steps"], payload["evals"])
+    fill(
+        ds,
+        payload["index"],
+        values,
+        payload["status"],
+        payload["cost_s"],
+        payload["steps"],
+        payload["evals"],
+    )
 
 
 def rebuild(ds_empty: xr.Dataset, journal: Journal) -> xr.Dataset:
@@ -154,4 +183,3 @@ def rebuild(ds_empty: xr.Dataset, journal: Journal) -> xr.Dataset:
     for _, payload in journal.read():
         fill_block(ds, payload)
     return ds
-

@@ -15,6 +15,7 @@ fsync it, ``os.replace`` it onto the final name, fsync the folder. A reader sees
 the old file or the new one, never a torn one; a writer killed before the rename
 leaves only a temporary file, which ``remove_stale_temps`` deletes later.
 """
+
 from __future__ import annotations
 
 import os
@@ -70,7 +71,10 @@ class SweepDir:
         return f"SweepDir({str(self.store_root)!r}, {self.sweep_id!r})"
 
     def __eq__(self, other) -> bool:
-        return isinstance(other, SweepDir) and (self.store_root, self.sweep_id) == (other.store_root, other.sweep_id)
+        return isinstance(other, SweepDir) and (self.store_root, self.sweep_id) == (
+            other.store_root,
+            other.sweep_id,
+        )
 
     def __hash__(self) -> int:
         return hash((self.store_root, self.sweep_id))

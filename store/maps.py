@@ -10,6 +10,7 @@ switch, safe in threads and on machines without a display). Every figure is
   long-duration stick-slip zone of Fig. 14 shaded and outlined.
 - ``friction_curves``: effective friction against v_ref, one line per W.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -31,8 +32,12 @@ DPI = 140
 SYMBOLS = {"W": r"$W$", "omega": r"$\omega$", "v_ref": r"$v_\mathrm{ref}$", "v_d": r"$v_d$"}
 NO_DATA_COLOUR = "#c8c8c8"
 STABILITY_COLOURS = {NO_DATA: NO_DATA_COLOUR, STABLE: "#ffffff", PU: "#e4572e", SU: "#4c72b0"}
-STABILITY_NAMES = {NO_DATA: "not computed / failed", STABLE: "stable",
-                   PU: "primary unstable (PU)", SU: "secondary unstable (SU)"}
+STABILITY_NAMES = {
+    NO_DATA: "not computed / failed",
+    STABLE: "stable",
+    PU: "primary unstable (PU)",
+    SU: "secondary unstable (SU)",
+}
 ZONE_COLOURS = {0.0: "#ffffff", 1.0: "#f2a541"}
 
 
@@ -61,7 +66,9 @@ def is_log_spaced(values: np.ndarray) -> bool:
     if v.size < 3 or v[0] <= 0:
         return False
     step, ratio = np.diff(v), np.diff(np.log(v))
-    return bool(np.allclose(ratio, ratio[0], rtol=1e-3) and not np.allclose(step, step[0], rtol=1e-3))
+    return bool(
+        np.allclose(ratio, ratio[0], rtol=1e-3) and not np.allclose(step, step[0], rtol=1e-3)
+    )
 
 
 def _edges(values: np.ndarray, log: bool) -> np.ndarray:
@@ -92,8 +99,9 @@ def _title(ds: xr.Dataset, what: str, da: xr.DataArray, title: str | None) -> st
     sweep_id = str(ds.attrs.get(A.SWEEP_ID, ""))[:10]
     # the averaged theory is the omega -> infinity limit: its omega coordinate means nothing
     hidden = {"omega"} if ds.attrs.get("path") == "averaged" else set()
-    fixed = ", ".join(f"{k} = {float(c):g}" for k, c in da.coords.items()
-                      if c.ndim == 0 and k not in hidden)
+    fixed = ", ".join(
+        f"{k} = {float(c):g}" for k, c in da.coords.items() if c.ndim == 0 and k not in hidden
+    )
     if hidden:
         fixed = ", ".join(filter(None, [fixed, "averaged (omega -> infinity)"]))
     head = f"{what}: {sweep}" + (f" ({sweep_id})" if sweep_id else "")
@@ -108,9 +116,14 @@ def _shade(ax, da: xr.DataArray, colours: dict, x: str, y: str) -> tuple[bool, b
     keys = sorted(colours)
     bounds = [keys[0] - 0.5] + [k + 0.5 for k in keys]
     values = np.where(np.isnan(da.values.astype(float)), NO_DATA, da.values)
-    ax.pcolormesh(_edges(da[x].values, logx), _edges(da[y].values, logy), values,
-                  cmap=ListedColormap([colours[k] for k in keys]),
-                  norm=BoundaryNorm(bounds, len(keys)), shading="flat")
+    ax.pcolormesh(
+        _edges(da[x].values, logx),
+        _edges(da[y].values, logy),
+        values,
+        cmap=ListedColormap([colours[k] for k in keys]),
+        norm=BoundaryNorm(bounds, len(keys)),
+        shading="flat",
+    )
     ax.set_xscale("log" if logx else "linear")
     ax.set_yscale("log" if logy else "linear")
     ax.set_xlabel(axis_label(da[x]))
@@ -151,34 +164,64 @@ def stability_map(ds: xr.Dataset, path, sel=None, title: str | None = None) -> P
     _outline(ax, chart == SU, "v_ref", "W", "dashed")
     lo = max(float(chart.v_ref.min()), float(chart.W.min()))
     hi = min(float(chart.v_ref.max()), float(chart.W.max()))
-    handles = [Patch(facecolor=STABILITY_COLOURS[k], edgecolor="0.3", label=STABILITY_NAMES[k])
-               for k in (STABLE, PU, SU, NO_DATA) if k in present or k in (PU, SU)]
+    handles = [
+        Patch(facecolor=STABILITY_COLOURS[k], edgecolor="0.3", label=STABILITY_NAMES[k])
+        for k in (STABLE, PU, SU, NO_DATA)
+        if k in present or k in (PU, SU)
+    ]
     if hi > lo:
-        handles += ax.plot([lo, hi], [lo, hi], color="0.2", linestyle="-.", linewidth=1.0,
-                           label=r"$W = v_\mathrm{ref}$")
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        handles += ax.plot(
+            [lo, hi],
+            [lo, hi],
+            color="0.2",
+            linestyle="-.",
+            linewidth=1.0,
+            label=r"$W = v_\mathrm{ref}$",
+        )
+    ax.legend(
+        handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False
+    )
     ax.set_title(_title(ds, "Stability chart", chart, title), fontsize=10)
     return _save(fig, path)
 
 
-def stick_slip_map(ds: xr.Dataset, path, sel=None, title: str | None = None,
-                   var: str = "long_stick_fraction", threshold: float = 0.0) -> Path:
+def stick_slip_map(
+    ds: xr.Dataset,
+    path,
+    sel=None,
+    title: str | None = None,
+    var: str = "long_stick_fraction",
+    threshold: float = 0.0,
+) -> Path:
     """Fig. 14-style map of the long-duration stick-slip zone over (omega, W), to ``path``."""
     zone = zone_map(ds, var, threshold, sel)
     fig, ax = _figure()
     _shade(ax, zone, ZONE_COLOURS, x="omega", y="W")
     _outline(ax, zone == 1.0, "omega", "W", "solid")
-    handles = [Patch(facecolor=ZONE_COLOURS[1.0], edgecolor="0.3", label="long-duration stick-slip"),
-               Patch(facecolor=ZONE_COLOURS[0.0], edgecolor="0.3", label="no long-duration stick")]
+    handles = [
+        Patch(facecolor=ZONE_COLOURS[1.0], edgecolor="0.3", label="long-duration stick-slip"),
+        Patch(facecolor=ZONE_COLOURS[0.0], edgecolor="0.3", label="no long-duration stick"),
+    ]
     if zone.isnull().any():
-        handles.append(Patch(facecolor=NO_DATA_COLOUR, edgecolor="0.3", label=STABILITY_NAMES[NO_DATA]))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False,
-              title=f"{var} > {threshold:g}", title_fontsize=8)
+        handles.append(
+            Patch(facecolor=NO_DATA_COLOUR, edgecolor="0.3", label=STABILITY_NAMES[NO_DATA])
+        )
+    ax.legend(
+        handles=handles,
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        fontsize=8,
+        frameon=False,
+        title=f"{var} > {threshold:g}",
+        title_fontsize=8,
+    )
     ax.set_title(_title(ds, "Stick-slip zone", zone, title), fontsize=10)
     return _save(fig, path)
 
 
-def friction_curves(ds: xr.Dataset, path, sel=None, title: str | None = None, var: str | None = None) -> Path:
+def friction_curves(
+    ds: xr.Dataset, path, sel=None, title: str | None = None, var: str | None = None
+) -> Path:
     """Effective friction against v_ref, one line per W (Figs. 5, 13), to ``path``."""
     curves = effective_friction_curve(ds, sel, var).sortby("W").sortby("v_ref")
     fig, ax = _figure()
@@ -186,8 +229,15 @@ def friction_curves(ds: xr.Dataset, path, sel=None, title: str | None = None, va
     cmap = ScalarMappable(norm=norm, cmap="viridis")
     marker = "o" if curves.sizes["v_ref"] <= 25 else None
     for w in curves.W.values:
-        ax.plot(curves.v_ref.values, curves.sel(W=w).values, color=cmap.to_rgba(w), marker=marker,
-                markersize=3, linewidth=1.3, label=f"W = {w:g}")
+        ax.plot(
+            curves.v_ref.values,
+            curves.sel(W=w).values,
+            color=cmap.to_rgba(w),
+            marker=marker,
+            markersize=3,
+            linewidth=1.3,
+            label=f"W = {w:g}",
+        )
     if curves.sizes["W"] <= 10:
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
     else:
@@ -195,6 +245,9 @@ def friction_curves(ds: xr.Dataset, path, sel=None, title: str | None = None, va
     ax.set_xscale("log" if is_log_spaced(curves.v_ref.values) else "linear")
     ax.set_xlabel(axis_label(curves.v_ref))
     units = curves.attrs.get("units", "")
-    ax.set_ylabel(f"{curves.name}  {curves.attrs.get('long_name', '')}" + (f" [{units}]" if units not in ("", "1") else ""))
+    ax.set_ylabel(
+        f"{curves.name}  {curves.attrs.get('long_name', '')}"
+        + (f" [{units}]" if units not in ("", "1") else "")
+    )
     ax.set_title(_title(ds, "Effective friction", curves, title), fontsize=10)
     return _save(fig, path)

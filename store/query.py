@@ -7,6 +7,7 @@ A value beyond either end of the grid by more than half the end step (a relative
 1e-9 on a one-value axis) is refused, so asking for ``v_d = 0.01`` of a cube that
 holds only ``v_d = 0.1`` is an error, not a silent substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
 """
+
 from __future__ import annotations
 
 from typing import Mapping
@@ -35,15 +36,16 @@ def _nearest(ds: xr.Dataset, axis: str, value) -> int:
     else:  # beyond an end of the grid: half of the step at that end
         tolerance = 0.5 * (ordered[1] - ordered[0] if x < ordered[0] else ordered[-1] - ordered[-2])
     if abs(grid[i] - x) > tolerance and not ordered[0] < x < ordered[-1]:
-        raise ValueError(f"sel[{axis!r}] = {x:g} is off the grid; available {axis} values: "
-                         f"{_show(grid)}")
+        raise ValueError(
+            f"sel[{axis!r}] = {x:g} is off the grid; available {axis} values: {_show(grid)}"
+        )
     return i
 
 
 def _show(values: np.ndarray, limit: int = 12) -> str:
     text = [f"{v:g}" for v in values]
     if len(text) > limit:
-        text = text[: limit // 2] + ["..."] + text[-limit // 2:]
+        text = text[: limit // 2] + ["..."] + text[-limit // 2 :]
     return "[" + ", ".join(text) + "]"
 
 
@@ -63,7 +65,9 @@ def _variable(ds: xr.Dataset, var: str, what: str) -> None:
         raise ValueError(f"{what}: the cube has no variable {var!r}; available: {output_names(ds)}")
 
 
-def plane(ds: xr.Dataset, var: str, dims: tuple[str, str], sel=None, what: str = "query") -> xr.DataArray:
+def plane(
+    ds: xr.Dataset, var: str, dims: tuple[str, str], sel=None, what: str = "query"
+) -> xr.DataArray:
     """Variable ``var`` over the two axes ``dims`` (in that order), NaN where status != 0.
 
     Every other axis must have one value after ``sel``; otherwise a ``ValueError``
@@ -73,14 +77,18 @@ def plane(ds: xr.Dataset, var: str, dims: tuple[str, str], sel=None, what: str =
     sub = select(ds, sel)
     for axis in AXES:
         if axis not in dims and sub.sizes[axis] > 1:
-            raise ValueError(f"{what}: axis {axis!r} has {sub.sizes[axis]} values {_show(sub[axis].values)}; "
-                             f"choose one with sel={{'{axis}': value}} (--sel {axis}=VALUE)")
+            raise ValueError(
+                f"{what}: axis {axis!r} has {sub.sizes[axis]} values {_show(sub[axis].values)}; "
+                f"choose one with sel={{'{axis}': value}} (--sel {axis}=VALUE)"
+            )
     squeeze = {a: 0 for a in AXES if a not in dims}
     sub = sub.isel(squeeze).transpose(*dims)
     return sub[var].where(sub["status"] == OK)
 
 
-def zone_map(ds: xr.Dataset, var: str = "long_stick_fraction", threshold: float = 0.0, sel=None) -> xr.DataArray:
+def zone_map(
+    ds: xr.Dataset, var: str = "long_stick_fraction", threshold: float = 0.0, sel=None
+) -> xr.DataArray:
     """Where long-duration stick-slip is present (Fig. 14): 1 if ``var > threshold``, else 0.
 
     Returns
@@ -91,8 +99,12 @@ def zone_map(ds: xr.Dataset, var: str = "long_stick_fraction", threshold: float 
     """
     values = plane(ds, var, ("W", "omega"), sel, "zone_map")
     zone = values.copy(data=np.where(values.isnull(), np.nan, (values > threshold).astype(float)))
-    zone.attrs = {"long_name": f"long-duration stick-slip present (1) or absent (0): {var} > {threshold:g}",
-                  "units": "1", "source_variable": var, "threshold": float(threshold)}
+    zone.attrs = {
+        "long_name": f"long-duration stick-slip present (1) or absent (0): {var} > {threshold:g}",
+        "units": "1",
+        "source_variable": var,
+        "threshold": float(threshold),
+    }
     return zone.rename("stick_slip_zone")
 
 
@@ -100,8 +112,10 @@ def _stability_source(ds: xr.Dataset) -> str:
     for name in ("stable", "max_real_eig"):
         if name in output_names(ds):
             return name
-    raise ValueError(f"stability_chart: needs the output 'stable' or 'max_real_eig' (method = 'averaged'); "
-                     f"the cube has {output_names(ds)}")
+    raise ValueError(
+        f"stability_chart: needs the output 'stable' or 'max_real_eig' (method = 'averaged'); "
+        f"the cube has {output_names(ds)}"
+    )
 
 
 def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
@@ -122,11 +136,18 @@ def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
     valid = values.notnull()
     unstable = ((values == 0) if source == "stable" else (values > 0)) & valid
     primary = np.logical_and.accumulate(unstable.values, axis=1)
-    labels = np.where(~valid.values, NO_DATA, np.where(primary, PU, np.where(unstable.values, SU, STABLE)))
-    chart = xr.DataArray(labels.astype(np.int8), coords=valid.coords, dims=valid.dims, name="stability")
-    chart.attrs = {"long_name": "stability of the averaged equilibrium", "source_variable": source,
-                   "flag_values": np.array([NO_DATA, STABLE, PU, SU], dtype=np.int8),
-                   "flag_meanings": STABILITY_MEANINGS}
+    labels = np.where(
+        ~valid.values, NO_DATA, np.where(primary, PU, np.where(unstable.values, SU, STABLE))
+    )
+    chart = xr.DataArray(
+        labels.astype(np.int8), coords=valid.coords, dims=valid.dims, name="stability"
+    )
+    chart.attrs = {
+        "long_name": "stability of the averaged equilibrium",
+        "source_variable": source,
+        "flag_values": np.array([NO_DATA, STABLE, PU, SU], dtype=np.int8),
+        "flag_meanings": STABILITY_MEANINGS,
+    }
     return chart
 
 
@@ -139,7 +160,9 @@ def effective_friction_curve(ds: xr.Dataset, sel=None, var: str | None = None) -
     if var is None:
         candidates = [v for v in ("F_eff", "F_mean") if v in output_names(ds)]
         if not candidates:
-            raise ValueError(f"effective_friction_curve: needs 'F_eff' or 'F_mean'; the cube has {output_names(ds)}")
+            raise ValueError(
+                f"effective_friction_curve: needs 'F_eff' or 'F_mean'; the cube has {output_names(ds)}"
+            )
         var = candidates[0]
     return plane(ds, var, ("W", "v_ref"), sel, "effective_friction_curve")
 

@@ -5,6 +5,7 @@ generation g holds ``a = noise + g`` (noise from seed 0, so zlib cannot shrink i
 and ``b = g``, and the global attribute ``generation = g``. Prints ``start g`` before
 and ``done g`` after each publish.
 """
+
 import sys
 
 import numpy as np
@@ -17,8 +18,15 @@ def noise(n: int) -> np.ndarray:
 
 
 def main(path: str, n: int) -> None:
-    coords = {"W": np.arange(n, dtype=float), "omega": np.arange(n, dtype=float) + 1.0, "v_ref": [0.1], "v_d": [0.1]}
-    ds = store.empty_cube(coords, {"a": ("a", "1"), "b": ("b", "1")}, {"sweep_id": "big", "name": "big"})
+    coords = {
+        "W": np.arange(n, dtype=float),
+        "omega": np.arange(n, dtype=float) + 1.0,
+        "v_ref": [0.1],
+        "v_d": [0.1],
+    }
+    ds = store.empty_cube(
+        coords, {"a": ("a", "1"), "b": ("b", "1")}, {"sweep_id": "big", "name": "big"}
+    )
     base = noise(n)
     for gen in range(10**6):
         ds["a"].values[...] = base + gen

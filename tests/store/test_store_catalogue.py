@@ -1,5 +1,6 @@
 """The SQLite catalogue: register / update / find / list, adoption of cubes without a row,
 and several processes writing at once (DESIGN.md §6, service mode)."""
+
 import sqlite3
 import subprocess
 import sys
@@ -18,12 +19,28 @@ ROOT = Path(__file__).resolve().parents[2]
 def test_register_update_get(tmp_path):
     cat = store.Catalogue(tmp_path)
     row = cat.register("a1b2c3", "fig14", '{"name":"fig14"}', 961, 61, tmp_path / "a1b2c3")
-    assert (row["state"], row["n_points"], row["n_blocks"], row["done_points"]) == ("queued", 961, 61, 0)
+    assert (row["state"], row["n_points"], row["n_blocks"], row["done_points"]) == (
+        "queued",
+        961,
+        61,
+        0,
+    )
     row = cat.update("a1b2c3", state="running", done_points=16, failed_points=1, done_blocks=1)
-    assert (row["state"], row["done_points"], row["failed_points"], row["done_blocks"]) == ("running", 16, 1, 1)
+    assert (row["state"], row["done_points"], row["failed_points"], row["done_blocks"]) == (
+        "running",
+        16,
+        1,
+        1,
+    )
     assert row["updated"] >= row["created"]
-    again = cat.register("a1b2c3", "fig14-renamed", '{"name":"fig14"}', 961, 61, tmp_path / "a1b2c3")
-    assert (again["state"], again["done_points"], again["created"]) == ("running", 16, row["created"])
+    again = cat.register(
+        "a1b2c3", "fig14-renamed", '{"name":"fig14"}', 961, 61, tmp_path / "a1b2c3"
+    )
+    assert (again["state"], again["done_points"], again["created"]) == (
+        "running",
+        16,
+        row["created"],
+    )
     assert again["name"] == "fig14-renamed"
     assert cat.get("a1b2c3") == again
     with sqlite3.connect(cat.path) as con:
@@ -40,16 +57,25 @@ def test_find_by_id_name_and_prefix(tmp_path):
     assert cat.find("demo")["sweep_id"] == "aaaa2222"
     assert cat.find("bbb")["sweep_id"] == "bbbb3333"
     assert cat.find("nothing") is None
-    with pytest.raises(LookupError, match="id prefix 'aaaa' is ambiguous: it matches aaaa1111, aaaa2222"):
+    with pytest.raises(
+        LookupError, match="id prefix 'aaaa' is ambiguous: it matches aaaa1111, aaaa2222"
+    ):
         cat.find("aaaa")
     assert [r["sweep_id"] for r in cat.list()] == ["aaaa1111", "aaaa2222", "bbbb3333"]
 
 
-@pytest.mark.parametrize("fields, error, message", [
-    (dict(stat="done"), ValueError, r"unknown field\(s\) \['stat'\]; updatable"),
-    (dict(state="finished"), ValueError, r"state must be one of \('queued', 'running', 'partial', 'done', 'failed'\)"),
-    (dict(done_points=-1), ValueError, r"done_points must be a non-negative integer, got -1"),
-])
+@pytest.mark.parametrize(
+    "fields, error, message",
+    [
+        (dict(stat="done"), ValueError, r"unknown field\(s\) \['stat'\]; updatable"),
+        (
+            dict(state="finished"),
+            ValueError,
+            r"state must be one of \('queued', 'running', 'partial', 'done', 'failed'\)",
+        ),
+        (dict(done_points=-1), ValueError, r"done_points must be a non-negative integer, got -1"),
+    ],
+)
 def test_update_error_messages(tmp_path, fields, error, message):
     cat = store.Catalogue(tmp_path)
     cat.register("abc", "n", "{}", 1, 1, "x")
@@ -74,9 +100,17 @@ def test_cube_without_row_is_adopted(tmp_path):
     (tmp_path / "not-a-sweep").mkdir()
     cat = store.Catalogue(tmp_path)
     row = cat.find("orphan")
-    assert (row["sweep_id"], row["state"], row["spec_json"]) == ("feed01", "partial", '{"name":"orphan"}')
+    assert (row["sweep_id"], row["state"], row["spec_json"]) == (
+        "feed01",
+        "partial",
+        '{"name":"orphan"}',
+    )
     assert row["path"] == str(tmp_path / "feed01")
-    assert (row["n_points"], row["done_points"], row["failed_points"]) == (status.size, status.size - 3, 2)
+    assert (row["n_points"], row["done_points"], row["failed_points"]) == (
+        status.size,
+        status.size - 3,
+        2,
+    )
     assert [r["sweep_id"] for r in cat.list()] == ["feed01"]
 
 
@@ -105,8 +139,16 @@ def test_two_processes_update_concurrently(tmp_path):
     cat = store.Catalogue(tmp_path)
     cat.register("shared", "shared", "{}", 1, 1, "x")
     code = WORKER.format(root=str(ROOT), n=n)
-    procs = [subprocess.Popen([sys.executable, "-c", code, str(tmp_path), f"writer{i}"], stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for i in range(2)]
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", code, str(tmp_path), f"writer{i}"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for i in range(2)
+    ]
     assert [p.stdout.readline().strip() for p in procs] == ["ready", "ready"]
     for p in procs:
         p.stdin.write("go\n")
@@ -114,7 +156,9 @@ def test_two_processes_update_concurrently(tmp_path):
     outs = [p.communicate(timeout=120) for p in procs]
     assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
     (start0, end0), (start1, end1) = [map(float, out.split()) for out, _ in outs]
-    print(f"writer windows: {end0 - start0:.3f} s, {end1 - start1:.3f} s, overlap {min(end0, end1) - max(start0, start1):.3f} s")
+    print(
+        f"writer windows: {end0 - start0:.3f} s, {end1 - start1:.3f} s, overlap {min(end0, end1) - max(start0, start1):.3f} s"
+    )
     assert max(start0, start1) < min(end0, end1), "the two writers did not overlap in time"
     rows = {r["sweep_id"]: r for r in cat.list()}
     for i in range(2):

@@ -1,4 +1,5 @@
 """The result cube's layout and round trip (DESIGN.md §4, STYLE.md 'Roundtrip tests')."""
+
 import json
 
 import numpy as np
@@ -19,7 +20,10 @@ def test_layout_follows_design_section_4(cube, tmp_path):
         assert [ds.sizes[a] for a in store.AXES] == [len(COORDS[a]) for a in store.AXES]
         for name in [*OUTPUTS, "status", "cost_s", "steps", "evals"]:
             assert ds[name].dims == store.AXES
-        assert ds["omega"].attrs == {"long_name": "dither angular frequency", "units": "rad per unit tau"}
+        assert ds["omega"].attrs == {
+            "long_name": "dither angular frequency",
+            "units": "rad per unit tau",
+        }
         assert all(set(ds[a].attrs) == {"long_name", "units"} for a in store.AXES)
         assert ds["F_mean"].dtype == np.float64
         assert (ds["F_mean"].attrs["long_name"], ds["F_mean"].attrs["units"]) == OUTPUTS["F_mean"]
@@ -43,12 +47,19 @@ def test_layout_follows_design_section_4(cube, tmp_path):
 def test_status_codes_agree_with_engine():
     from engine import status as S  # engine.status is plain Python (no numba)
 
-    assert (store.OK, store.NOT_COMPUTED, store.FAILED, store.NON_FINITE) == (S.OK, S.NOT_COMPUTED, S.FAILED, S.NON_FINITE)
+    assert (store.OK, store.NOT_COMPUTED, store.FAILED, store.NON_FINITE) == (
+        S.OK,
+        S.NOT_COMPUTED,
+        S.FAILED,
+        S.NON_FINITE,
+    )
     assert store.STATUS_MEANINGS == tuple(S.MEANINGS[k] for k in range(4))
 
 
 def test_axis_units_and_long_names_can_be_overridden():
-    ds = make_cube(axis_units={"W": "m/s", "omega": "rad/s"}, axis_long_names={"W": "velocity amplitude v_a"})
+    ds = make_cube(
+        axis_units={"W": "m/s", "omega": "rad/s"}, axis_long_names={"W": "velocity amplitude v_a"}
+    )
     assert ds["W"].attrs == {"long_name": "velocity amplitude v_a", "units": "m/s"}
     assert ds["omega"].attrs["units"] == "rad/s" and ds["v_ref"].attrs["units"] == "1"
 
@@ -81,28 +92,53 @@ def test_fill_uses_c_order_over_axes(cube):
     rows = store.grid_points(cube, index)
     expected = [[COORDS[a][i] for a, i in zip(store.AXES, point)] for point in zip(*multi)]
     np.testing.assert_array_equal(rows, expected)
-    assert store.pending_index(cube).size == cube["status"].size - np.count_nonzero(arrays["status"] == 0)
+    assert store.pending_index(cube).size == cube["status"].size - np.count_nonzero(
+        arrays["status"] == 0
+    )
 
 
 def test_status_counts(cube):
     index = np.arange(4)
-    store.fill(cube, index, {n: np.zeros(4) for n in OUTPUTS}, np.array([0, 2, 3, 0]), np.zeros(4),
-               np.zeros(4, int), np.zeros(4, int))
-    assert store.status_counts(cube) == {"ok": 2, "not_yet_computed": cube["status"].size - 4,
-                                         "failed": 1, "non_finite": 1}
+    store.fill(
+        cube,
+        index,
+        {n: np.zeros(4) for n in OUTPUTS},
+        np.array([0, 2, 3, 0]),
+        np.zeros(4),
+        np.zeros(4, int),
+        np.zeros(4, int),
+    )
+    assert store.status_counts(cube) == {
+        "ok": 2,
+        "not_yet_computed": cube["status"].size - 4,
+        "failed": 1,
+        "non_finite": 1,
+    }
 
 
-@pytest.mark.parametrize("change, message", [
-    (dict(values={"F_mean": np.zeros(2)}), r"missing \['long_stick_fraction'\]"),
-    (dict(values={**{n: np.zeros(2) for n in OUTPUTS}, "x": np.zeros(2)}), r"unknown \['x'\]"),
-    (dict(cost_s=np.zeros(3)), r"cost_s has shape \(3,\), expected \(2,\)"),
-    (dict(status=np.array([0, 7])), r"status codes must be in 0..3, got \[7\]"),
-    (dict(index=np.array([0, 24])), r"flat_index must lie in \[0, 24\) for a cube of shape \(3, 4, 2, 1\)"),
-    (dict(index=np.array([0.0, 1.0])), r"flat_index must be a 1-D integer array"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(values={"F_mean": np.zeros(2)}), r"missing \['long_stick_fraction'\]"),
+        (dict(values={**{n: np.zeros(2) for n in OUTPUTS}, "x": np.zeros(2)}), r"unknown \['x'\]"),
+        (dict(cost_s=np.zeros(3)), r"cost_s has shape \(3,\), expected \(2,\)"),
+        (dict(status=np.array([0, 7])), r"status codes must be in 0..3, got \[7\]"),
+        (
+            dict(index=np.array([0, 24])),
+            r"flat_index must lie in \[0, 24\) for a cube of shape \(3, 4, 2, 1\)",
+        ),
+        (dict(index=np.array([0.0, 1.0])), r"flat_index must be a 1-D integer array"),
+    ],
+)
 def test_fill_refuses_bad_input_and_writes_nothing(cube, change, message):
-    args = dict(index=np.array([0, 1]), values={n: np.ones(2) for n in OUTPUTS}, status=np.zeros(2, np.int8),
-                cost_s=np.ones(2), steps=np.ones(2, int), evals=np.ones(2, int))
+    args = dict(
+        index=np.array([0, 1]),
+        values={n: np.ones(2) for n in OUTPUTS},
+        status=np.zeros(2, np.int8),
+        cost_s=np.ones(2),
+        steps=np.ones(2, int),
+        evals=np.ones(2, int),
+    )
     args.update(change)
     before = cube.copy(deep=True)
     with pytest.raises(ValueError, match=message):
@@ -110,15 +146,18 @@ def test_fill_refuses_bad_input_and_writes_nothing(cube, change, message):
     xr.testing.assert_identical(cube, before)
 
 
-@pytest.mark.parametrize("coords, variables, message", [
-    ({**COORDS, "x": [1.0]}, OUTPUTS, r"unknown \['x'\]"),
-    ({k: v for k, v in COORDS.items() if k != "v_d"}, OUTPUTS, r"missing \['v_d'\]"),
-    ({**COORDS, "W": []}, OUTPUTS, r"coords\['W'\] must be a non-empty 1-D"),
-    ({**COORDS, "W": [0.1, 0.1]}, OUTPUTS, r"coords\['W'\] has repeated values"),
-    ({**COORDS, "omega": [1.0, np.nan]}, OUTPUTS, r"coords\['omega'\] must be finite"),
-    (COORDS, {"status": ("s", "1")}, r"'status' is a reserved name"),
-    (COORDS, {"F": "force"}, r"variables\['F'\] must be \(long_name, units\)"),
-])
+@pytest.mark.parametrize(
+    "coords, variables, message",
+    [
+        ({**COORDS, "x": [1.0]}, OUTPUTS, r"unknown \['x'\]"),
+        ({k: v for k, v in COORDS.items() if k != "v_d"}, OUTPUTS, r"missing \['v_d'\]"),
+        ({**COORDS, "W": []}, OUTPUTS, r"coords\['W'\] must be a non-empty 1-D"),
+        ({**COORDS, "W": [0.1, 0.1]}, OUTPUTS, r"coords\['W'\] has repeated values"),
+        ({**COORDS, "omega": [1.0, np.nan]}, OUTPUTS, r"coords\['omega'\] must be finite"),
+        (COORDS, {"status": ("s", "1")}, r"'status' is a reserved name"),
+        (COORDS, {"F": "force"}, r"variables\['F'\] must be \(long_name, units\)"),
+    ],
+)
 def test_empty_cube_error_messages(coords, variables, message):
     with pytest.raises(ValueError, match=message):
         store.empty_cube(coords, variables)
@@ -135,10 +174,28 @@ def test_axes_keep_the_given_order():
 
 
 def test_attrs_encoding_rules():
-    encoded = A.encode({"s": "x", "i": 3, "f": 0.5, "n": np.int64(2), "b": False, "none": None,
-                        "d": {"b": 1, "a": [1, 2]}, "arr": np.array([1.0, 2.0])})
-    assert encoded == {"s": "x", "i": 3, "f": 0.5, "n": 2, "b": "false", "none": "null",
-                       "d": '{"a":[1,2],"b":1}', "arr": "[1.0,2.0]"}
+    encoded = A.encode(
+        {
+            "s": "x",
+            "i": 3,
+            "f": 0.5,
+            "n": np.int64(2),
+            "b": False,
+            "none": None,
+            "d": {"b": 1, "a": [1, 2]},
+            "arr": np.array([1.0, 2.0]),
+        }
+    )
+    assert encoded == {
+        "s": "x",
+        "i": 3,
+        "f": 0.5,
+        "n": 2,
+        "b": "false",
+        "none": "null",
+        "d": '{"a":[1,2],"b":1}',
+        "arr": "[1.0,2.0]",
+    }
     assert A.decode(encoded["d"]) == {"a": [1, 2], "b": 1}
 
 

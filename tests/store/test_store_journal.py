@@ -1,5 +1,6 @@
 """The crash-safe journal (DESIGN.md §4): one file per finished block, only complete files
 count, and the cube rebuilt from it equals the cube filled directly."""
+
 import subprocess
 import sys
 
@@ -37,7 +38,10 @@ def test_write_done_read_roundtrip(cube, tmp_path):
             np.testing.assert_array_equal(read[block_id][key], array)
             assert read[block_id][key].dtype == FIELDS.get(key, np.float64)
     assert sorted(p.name for p in (tmp_path / "journal").iterdir()) == [
-        "block-000000.npz", "block-000001.npz", "block-000003.npz"]
+        "block-000000.npz",
+        "block-000001.npz",
+        "block-000003.npz",
+    ]
 
 
 def test_journal_carries_every_bookkeeping_variable(cube):
@@ -58,8 +62,11 @@ def test_done_ignores_temp_files_and_torn_blocks(cube, tmp_path):
 
 def test_done_removes_temps_of_dead_writers(cube, tmp_path):
     journal = _journal_with_blocks(cube, tmp_path)
-    dead = int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
-                              capture_output=True, text=True).stdout)
+    dead = int(
+        subprocess.run(
+            [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True
+        ).stdout
+    )
     orphan = tmp_path / f".block-000007.npz.tmp-{dead}-0badc0de"
     orphan.write_bytes(b"PK")
     assert journal.done() == set(BLOCKS) and not orphan.exists()
@@ -74,7 +81,7 @@ def test_rewriting_a_block_replaces_it(cube, tmp_path):
     journal = store.Journal(tmp_path)
     journal.write(2, _payload(cube, np.arange(3), seed=1))
     journal.write(2, _payload(cube, np.arange(3), seed=2))
-    (block_id, payload), = journal.read()
+    ((block_id, payload),) = journal.read()
     np.testing.assert_array_equal(payload["status"], _payload(cube, np.arange(3), seed=2)["status"])
 
 
@@ -88,16 +95,24 @@ def test_rebuild_equals_filling_directly(cube, tmp_path):
     xr.testing.assert_identical(rebuilt, direct)
     xr.testing.assert_identical(cube, pristine)  # the empty cube is not modified
     written = np.concatenate(list(BLOCKS.values()))
-    not_ok = np.concatenate([i[block_arrays(cube, i, seed=b)["status"] != 0] for b, i in BLOCKS.items()])
+    not_ok = np.concatenate(
+        [i[block_arrays(cube, i, seed=b)["status"] != 0] for b, i in BLOCKS.items()]
+    )
     expected = (set(range(cube["status"].size)) - set(written)) | set(not_ok)
     assert set(store.pending_index(rebuilt)) == expected
 
 
-@pytest.mark.parametrize("payload, message", [
-    ({"index": np.arange(2)}, r"journal payload lacks \['status', 'cost_s', 'steps', 'evals'\]"),
-    ({**{k: np.zeros(2) for k in FIELDS}, "F_mean": np.zeros(3)}, r"'F_mean': \(3,\)"),
-    ({**{k: np.zeros((2, 2)) for k in FIELDS}}, r"must all be 1-D"),
-])
+@pytest.mark.parametrize(
+    "payload, message",
+    [
+        (
+            {"index": np.arange(2)},
+            r"journal payload lacks \['status', 'cost_s', 'steps', 'evals'\]",
+        ),
+        ({**{k: np.zeros(2) for k in FIELDS}, "F_mean": np.zeros(3)}, r"'F_mean': \(3,\)"),
+        ({**{k: np.zeros((2, 2)) for k in FIELDS}}, r"must all be 1-D"),
+    ],
+)
 def test_write_refuses_bad_payloads(tmp_path, payload, message):
     with pytest.raises(ValueError, match=message):
         store.Journal(tmp_path).write(0, payload)
@@ -108,4 +123,11 @@ def test_block_id_and_name_clash_errors(tmp_path):
     with pytest.raises(ValueError, match="block_id must be a non-negative integer, got -1"):
         store.Journal(tmp_path).path(-1)
     with pytest.raises(ValueError, match=r"output names \['status'\] clash"):
-        store.block_payload(np.arange(1), {"status": np.zeros(1)}, np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1))
+        store.block_payload(
+            np.arange(1),
+            {"status": np.zeros(1)},
+            np.zeros(1),
+            np.zeros(1),
+            np.zeros(1),
+            np.zeros(1),
+        )

@@ -1,4 +1,5 @@
 """Store folder layout (README 'Store layout', DESIGN.md §5 default store)."""
+
 import pytest
 
 import store
@@ -8,7 +9,11 @@ from store import layout
 def test_sweep_dir_paths_and_spec(tmp_path):
     sweep = store.SweepDir(tmp_path, "b305ba3e9216")
     assert sweep.root == tmp_path / "b305ba3e9216"
-    assert (sweep.cube.name, sweep.journal.name, sweep.spec.name) == ("cube.h5", "journal", "spec.json")
+    assert (sweep.cube.name, sweep.journal.name, sweep.spec.name) == (
+        "cube.h5",
+        "journal",
+        "spec.json",
+    )
     sweep.write_spec('{"name":"demo"}')
     assert sweep.spec.read_text() == '{"name":"demo"}'
     assert sorted(p.name for p in sweep.root.iterdir()) == ["spec.json"]  # no temporary left

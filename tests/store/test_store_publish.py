@@ -1,5 +1,6 @@
 """Atomic publish (DESIGN.md §4): a reader sees the old cube or the new one, never a torn
 file, even when the writer is killed with SIGKILL in the middle of an HDF5 write."""
+
 import os
 import signal
 import subprocess
@@ -21,7 +22,9 @@ N_BIG = 600  # 600 x 600 points, two outputs: ~3 MB of zlib-resistant data, ~0.2
 
 
 def _dead_pid() -> int:
-    proc = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True
+    )
     return int(proc.stdout)
 
 
@@ -64,8 +67,11 @@ def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatc
 def _kill_mid_write(path: Path, fraction: float) -> tuple[subprocess.Popen, int]:
     """Start the writer, let it publish twice, then SIGSTOP it while a temporary file
     exists (so it is provably between create and rename) and SIGKILL it."""
-    proc = subprocess.Popen([sys.executable, str(HERE / "storetest_writer.py"), str(path), str(N_BIG)],
-                            stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, str(HERE / "storetest_writer.py"), str(path), str(N_BIG)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     lines = iter(proc.stdout)
     assert next(lines).strip() == "start 0"
     t = time.monotonic()

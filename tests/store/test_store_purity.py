@@ -1,6 +1,7 @@
 """store/ never imports numba, dask, engine or sweeps (ARCHITECTURE.md) — not at import
 time (tests/test_layering.py) and not while it works: a whole build / journal /
 publish / open / catalogue / query / map cycle runs here with those packages blocked."""
+
 import subprocess
 import sys
 from pathlib import Path
@@ -34,6 +35,8 @@ store.friction_curves(ds, root + "/curves.png", sel={{"v_d": 0.1}})
 
 def test_store_cycle_runs_with_numba_dask_engine_sweeps_blocked(tmp_path):
     code = CYCLE.format(root=str(ROOT), here=str(Path(__file__).parent))
-    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert (tmp_path / "map.png").stat().st_size > 10_000

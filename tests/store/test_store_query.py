@@ -4,6 +4,7 @@ Labels follow DESIGN.md §1: PU = unstable and connected to the smallest W (W = 
 paper's Fig. 9) through unstable points at the same v_ref; SU = unstable but separated
 from it by a stable point. The store also treats a missing point as a separation.
 """
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -12,40 +13,54 @@ import store
 from store import NO_DATA, PU, STABLE, SU
 from storetest_cubes import STABLE_GRID, V_REF, W, averaged_cube
 
-EXPECTED = np.array([  # by the rule above, column by column
-    [PU, STABLE, PU, STABLE, PU, PU],
-    [PU, STABLE, PU, SU, PU, NO_DATA],
-    [PU, STABLE, STABLE, SU, PU, SU],
-    [STABLE, STABLE, SU, STABLE, PU, SU],
-    [STABLE, STABLE, SU, STABLE, PU, STABLE],
-    [STABLE, STABLE, STABLE, STABLE, PU, SU],
-])
+EXPECTED = np.array(
+    [  # by the rule above, column by column
+        [PU, STABLE, PU, STABLE, PU, PU],
+        [PU, STABLE, PU, SU, PU, NO_DATA],
+        [PU, STABLE, STABLE, SU, PU, SU],
+        [STABLE, STABLE, SU, STABLE, PU, SU],
+        [STABLE, STABLE, SU, STABLE, PU, STABLE],
+        [STABLE, STABLE, STABLE, STABLE, PU, SU],
+    ]
+)
+
 
 def test_pu_su_labels_by_construction():
     chart = store.stability_chart(averaged_cube(), sel={"v_d": 0.1})
     assert chart.dims == ("v_ref", "W") and chart.dtype == np.int8
     np.testing.assert_array_equal(chart.values, EXPECTED.T)
     assert chart.attrs["flag_values"].tolist() == [NO_DATA, STABLE, PU, SU]
-    assert chart.attrs["flag_meanings"].split() == ["no_data", "stable", "primary_unstable", "secondary_unstable"]
+    assert chart.attrs["flag_meanings"].split() == [
+        "no_data",
+        "stable",
+        "primary_unstable",
+        "secondary_unstable",
+    ]
 
 
 def test_labels_from_max_real_eig_and_from_a_descending_w_axis():
     from_eig = store.stability_chart(averaged_cube(with_stable=False), sel={"v_d": 0.01})
     np.testing.assert_array_equal(from_eig.values, EXPECTED.T)
-    flipped = store.stability_chart(averaged_cube(W=W[::-1], stable=STABLE_GRID[::-1]), sel={"v_d": 0.1})
+    flipped = store.stability_chart(
+        averaged_cube(W=W[::-1], stable=STABLE_GRID[::-1]), sel={"v_d": 0.1}
+    )
     np.testing.assert_array_equal(flipped["W"].values, W)
     np.testing.assert_array_equal(flipped.values, EXPECTED.T)
 
 
 def test_zone_map_threshold_and_missing_points():
     outputs = {"long_stick_fraction": ("fraction in long sticks", "1")}
-    ds = store.empty_cube({"W": [0.0, 1.0], "omega": [10.0, 100.0, 1000.0], "v_ref": [0.1], "v_d": [0.1]}, outputs)
+    ds = store.empty_cube(
+        {"W": [0.0, 1.0], "omega": [10.0, 100.0, 1000.0], "v_ref": [0.1], "v_d": [0.1]}, outputs
+    )
     ds["long_stick_fraction"].values[..., 0, 0] = [[0.0, 0.05, 0.3], [0.0, 0.0, 0.7]]
     ds["status"].values[..., 0, 0] = [[0, 0, 0], [0, 3, 0]]
     zone = store.zone_map(ds)
     assert zone.dims == ("W", "omega")
     np.testing.assert_array_equal(zone.values, [[0.0, 1.0, 1.0], [0.0, np.nan, 1.0]])
-    np.testing.assert_array_equal(store.zone_map(ds, threshold=0.1).values, [[0, 0, 1], [0, np.nan, 1]])
+    np.testing.assert_array_equal(
+        store.zone_map(ds, threshold=0.1).values, [[0, 0, 1], [0, np.nan, 1]]
+    )
     assert zone["omega"].attrs["units"] == "rad per unit tau"  # axis metadata survives
 
 
@@ -56,8 +71,10 @@ def test_effective_friction_curve_prefers_f_eff_and_masks_bad_points():
     expected = ds["F_eff"].isel(omega=0, v_d=0).where(ds["status"].isel(omega=0, v_d=0) == 0)
     np.testing.assert_array_equal(curve.values, expected.values)
     assert np.isnan(curve.values[1, 5])  # the failed point
-    simulated = store.empty_cube({"W": [0.0], "omega": [1.0], "v_ref": [0.1, 0.2], "v_d": [0.1]},
-                                 {"F_mean": ("mean friction", "1")})
+    simulated = store.empty_cube(
+        {"W": [0.0], "omega": [1.0], "v_ref": [0.1, 0.2], "v_d": [0.1]},
+        {"F_mean": ("mean friction", "1")},
+    )
     assert store.effective_friction_curve(simulated).name == "F_mean"
 
 
@@ -79,18 +96,40 @@ def test_select_is_nearest_neighbour():
     assert store.select(ds, {"v_ref": 1.04})["v_ref"].values.tolist() == [1.0]  # within half a step
 
 
-@pytest.mark.parametrize("call, message", [
-    (lambda ds: store.select(ds, {"vd": 0.1}), r"sel: unknown axis \['vd'\]; axes are \('W', 'omega', 'v_ref', 'v_d'\)"),
-    (lambda ds: store.select(ds, {"v_d": 0.5}), r"sel\['v_d'\] = 0.5 is off the grid; available v_d values: \[0.1, 0.01\]"),
-    (lambda ds: store.select(ds, {"omega": 10.0}), r"available omega values: \[1000\]"),
-    (lambda ds: store.select(ds, {"W": "fast"}), r"sel\['W'\]: expected a number, got 'fast'"),
-    (lambda ds: store.stability_chart(ds), r"stability_chart: axis 'v_d' has 2 values \[0.1, 0.01\]; choose one with sel"),
-    (lambda ds: store.zone_map(ds, sel={"v_d": 0.1}), r"zone_map: the cube has no variable 'long_stick_fraction'; available: \['F_eff'"),
-    (lambda ds: store.table(ds, var="F_mean"), r"table: the cube has no variable 'F_mean'"),
-    (lambda ds: store.effective_friction_curve(ds.drop_vars("F_eff"), sel={"v_d": 0.1}), r"needs 'F_eff' or 'F_mean'"),
-    (lambda ds: store.stability_chart(ds.drop_vars(["stable", "max_real_eig"]), sel={"v_d": 0.1}),
-     r"needs the output 'stable' or 'max_real_eig'"),
-])
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (
+            lambda ds: store.select(ds, {"vd": 0.1}),
+            r"sel: unknown axis \['vd'\]; axes are \('W', 'omega', 'v_ref', 'v_d'\)",
+        ),
+        (
+            lambda ds: store.select(ds, {"v_d": 0.5}),
+            r"sel\['v_d'\] = 0.5 is off the grid; available v_d values: \[0.1, 0.01\]",
+        ),
+        (lambda ds: store.select(ds, {"omega": 10.0}), r"available omega values: \[1000\]"),
+        (lambda ds: store.select(ds, {"W": "fast"}), r"sel\['W'\]: expected a number, got 'fast'"),
+        (
+            lambda ds: store.stability_chart(ds),
+            r"stability_chart: axis 'v_d' has 2 values \[0.1, 0.01\]; choose one with sel",
+        ),
+        (
+            lambda ds: store.zone_map(ds, sel={"v_d": 0.1}),
+            r"zone_map: the cube has no variable 'long_stick_fraction'; available: \['F_eff'",
+        ),
+        (lambda ds: store.table(ds, var="F_mean"), r"table: the cube has no variable 'F_mean'"),
+        (
+            lambda ds: store.effective_friction_curve(ds.drop_vars("F_eff"), sel={"v_d": 0.1}),
+            r"needs 'F_eff' or 'F_mean'",
+        ),
+        (
+            lambda ds: store.stability_chart(
+                ds.drop_vars(["stable", "max_real_eig"]), sel={"v_d": 0.1}
+            ),
+            r"needs the output 'stable' or 'max_real_eig'",
+        ),
+    ],
+)
 def test_error_messages(call, message):
     with pytest.raises(ValueError, match=message):
         call(averaged_cube())
