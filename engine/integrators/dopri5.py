@@ -77,7 +77,7 @@ W_H, W_REJ = 0, 1   # scalar slots of the work state
 
 
 def _make_attempt(tab, n, n_err, rhs):
-    """njit ``attempt(t, hh, y, p, sq, K, yt, yn, rtol, atol) -> err``: stages 2..7 (k1 given)."""
+    """njit ``attempt(t, hh, y, p, sq, K, Y, rtol, atol) -> err``: stages 2..7 (k1 given)."""
     a, c, e = tab.a, tab.c, tab.b_err
     a21 = a[1, 0]
     a31, a32 = a[2, 0], a[2, 1]
@@ -89,8 +89,9 @@ def _make_attempt(tab, n, n_err, rhs):
     e1, e3, e4, e5, e6, e7 = e[0], e[2], e[3], e[4], e[5], e[6]
 
     @njit(error_model="numpy")
-    def attempt(t, hh, y, p, sq, K, yt, yn, rtol, atol):
+    def attempt(t, hh, y, p, sq, K, Y, rtol, atol):
         k1, k2, k3, k4, k5, k6, k7 = K[0], K[1], K[2], K[3], K[4], K[5], K[6]
+        yt, yn = Y[0], Y[1]
         for i in range(n):
             yt[i] = y[i] + hh * a21 * k1[i]
         rhs(t + c2 * hh, yt, p, sq, k2)
@@ -216,7 +217,6 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         K, Y, Q, G, state = work
-        yt, yn, ym, ytmp = Y[0], Y[1], Y[2], Y[3]
         rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]
         if fresh != FRESH_NONE:
             rhs(t0, y, p, sq, K[0])
@@ -224,7 +224,7 @@ def make_stepper(problem) -> Stepper:
             if n_ev:
                 events(t0, y, p, sq, G[0])
             if fresh == FRESH_START:
-                state[W_H] = initial_step(t0, y, K[0], p, sq, yt, K[1], rtol, atol, t1 - t0)
+                state[W_H] = initial_step(t0, y, K[0], p, sq, Y[0], K[1], rtol, atol, t1 - t0)
                 state[W_REJ] = 0.0
                 ctr[CTR_EVALS] += 1
         h = state[W_H]
@@ -233,7 +233,7 @@ def make_stepper(problem) -> Stepper:
             rem = t1 - t
             last = STRETCH * h >= rem
             hh = rem if last else h
-            err = attempt(t, hh, y, p, sq, K, yt, yn, rtol, atol)
+            err = attempt(t, hh, y, p, sq, K, Y, rtol, atol)
             ctr[CTR_EVALS] += 6
             if ctr[CTR_STEPS] + ctr[CTR_REJECTED] >= cfg[CFG_MAX_STEPS]:
                 return S.FAILED
@@ -246,35 +246,35 @@ def make_stepper(problem) -> Stepper:
                 continue
             h_next = hh * _factor(err, state[W_REJ] != 0.0)
             if n_ev:
-                events(t + hh, yn, p, sq, G[1])
+                events(t + hh, Y[1], p, sq, G[1])
                 th, idx = 2.0, -1
                 if _sign_change(G[0], G[1], n_ev):
                     coeffs(K, Q)
-                    th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
+                    th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[2])
                 if EVENT_MARGIN < th < 1.0 - EVENT_MARGIN:
                     # retake the step so that it ends on the kink
                     ctr[CTR_REJECTED] += 1
                     hh = th * hh
                     last = False
-                    err = attempt(t, hh, y, p, sq, K, yt, yn, rtol, atol)
+                    err = attempt(t, hh, y, p, sq, K, Y, rtol, atol)
                     ctr[CTR_EVALS] += 6
                     if not err <= 1.0:
                         ctr[CTR_REJECTED] += 1
                         h = hh * _factor(err, False)
                         state[W_REJ] = 1.0
                         continue
-                    events(t + hh, yn, p, sq, G[1])
+                    events(t + hh, Y[1], p, sq, G[1])
                     if G[1, idx] * G[0, idx] <= 0.0:
                         G[1, idx] = 0.0   # reached or passed: mute it for the next step
                     # else: fell short (dense output across the corner is only O(h^3)
                     # exact); the next step finds the root again, from the near side
             if needs_mid:
                 coeffs(K, Q)
-                dense_eval(y, hh, Q, 0.5, ym)
+                dense_eval(y, hh, Q, 0.5, Y[2])
             t_new = t1 if last else t + hh
-            observe(t, y, t_new, yn, ym, p, sq, obs)
+            observe(t, y, t_new, Y[1], Y[2], p, sq, obs)
             for i in range(n):
-                y[i] = yn[i]
+                y[i] = Y[1, i]
                 K[0, i] = K[6, i]
             if n_ev:
                 for i in range(n_ev):
