@@ -179,6 +179,12 @@ def run_setting(plan, method: str, setting: dict, repeats: int) -> dict:
     return row
 
 
+def is_reference(row: dict, ref: dict) -> bool:
+    """True when ``row`` ran the very method and settings of the reference run."""
+    return (row["method"] == ref["method"]
+            and settings_of(row["setting"]) == settings_of(ref["setting"]))
+
+
 # --------------------------------------------------------------------------- errors
 def quantity_error(name: str, q: float, q_ref: float) -> float:
     """Absolute error for time fractions, relative error otherwise (module docstring)."""
@@ -225,7 +231,7 @@ def study_scene(name: str, quick: bool, repeats: int) -> dict:
         for s in (steps[::2] if quick else steps):
             row = run_setting(plan, m, s, repeats)
             row["error"] = errors(row, refs[0], cfg["queried"])
-            row["is_reference"] = (m, s) == tuple(cfg["refs"][0])
+            row["is_reference"] = is_reference(row, refs[0])
             rows.append(row)
             print(f"  {m:7s} {row['label']:12s} err {row['error']['combined']:9.2e} "
                   f"t {1e3 * row['time']:9.2f} ms evals {row['evals']}", flush=True)
