@@ -23,9 +23,9 @@ from sweeps.run import compute_block, submit, warm_up
 from sweeps.spec import parse_spec
 
 
-def bench_spec(n_w: int, n_omega: int, n_vref: int, t_end: float) -> dict:
+def bench_spec(n_w: int, n_omega: int, n_vref: int, t_end: float, block_size=None) -> dict:
     return {
-        "name": "bench-sweep", "friction": "lugre", "dither": "square-velocity",
+        "name": "bench-sweep", "block_size": block_size, "friction": "lugre", "dither": "square-velocity",
         "method": "simulate", "accuracy": "draft",
         "outputs": ["v_mean", "v_slow_p2p", "F_mean"],
         "time": {"t_end": t_end, "t_transient": t_end / 2},
@@ -53,8 +53,10 @@ def on_dask(plan, workers: int) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--t-end", type=float, default=100.0)
+    ap.add_argument("--block-size", type=int, default=None, help="points per block "
+                    "(default: the planner's choice)")
     args = ap.parse_args()
-    spec = parse_spec(bench_spec(10, 10, 10, args.t_end))
+    spec = parse_spec(bench_spec(10, 10, 10, args.t_end, args.block_size))
     plan = make_plan(spec)
     print(f"sweep: {plan.n_points} points in {len(plan.blocks)} blocks, "
           f"{plan.numerics.integrator} ({plan.numerics.label}), t_end = {args.t_end}")
