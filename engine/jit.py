@@ -8,8 +8,13 @@ Giving every dispatcher a *deterministic* UUID (its qualified name plus the fact
 key) makes the pickle, hence the cache key, reproducible: the second process loads the
 machine code from ``__pycache__`` (or numba's user cache dir) instead of compiling.
 
-The UUID only names the dispatcher for pickling; two dispatchers share one only if they
-come from the same function with the same key, i.e. they are the same kernel.
+The UUID must be unique per distinct closure: numba's unpickler maps a UUID to the live
+dispatcher registered under it (``Dispatcher._rebuild``), so two different closures sharing
+one could be confused. It is therefore derived from the function's qualified name and its
+closure cells: constants by ``repr`` (numpy arrays by their bytes), jitted callees by their
+own (recursively derived) UUID. A cell without a stable representation (a plain Python
+object) keeps numba's random UUID: the kernel is then compiled per process -- a cache miss,
+never a wrong kernel.
 
 numba checks only the source file of a cached function for changes, not the files of the
 functions it calls, so an edit elsewhere in the engine could replay stale machine code.
@@ -24,6 +29,7 @@ import os
 from pathlib import Path
 
 import numba
+import numpy
 
 ENGINE_ROOT = Path(__file__).resolve().parent
 
@@ -56,27 +62,50 @@ def _use_engine_cache_dir() -> None:
 _use_engine_cache_dir()
 
 
-def njit(fn=None, *, key: object = "", **options):
-    """``numba.njit(cache=True, **options)`` with a deterministic dispatcher UUID.
+_STABLE = (bool, int, float, complex, str, bytes, type(None))
 
-    Parameters
-    ----------
-    fn
-        The function (when used as a bare decorator ``@njit``).
-    key
-        For closures made by a factory: everything that distinguishes one closure from
-        another of the same function (the Scene, flags, ...), as a value whose ``repr``
-        is stable across processes.
-    """
+
+def _stable_repr(value) -> str | None:
+    """A process-independent text for a closure cell, or None if there is none."""
+    if isinstance(value, _STABLE):
+        return repr(value)
+    if isinstance(value, numpy.ndarray):
+        return f"ndarray{value.dtype}{value.shape}:{hashlib.sha256(value.tobytes()).hexdigest()}"
+    if isinstance(value, tuple):
+        parts = [_stable_repr(v) for v in value]
+        return None if None in parts else "(" + ",".join(parts) + ")"
+    uuid = getattr(value, "_ditherlab_uuid", None)  # a dispatcher made by this module
+    return uuid
+
+
+def closure_uuid(func) -> str | None:
+    """Deterministic UUID of ``func``: its qualified name and the texts of its cells."""
+    parts = [f"{func.__module__}.{func.__qualname__}"]
+    for cell in func.__closure__ or ():
+        try:
+            value = cell.cell_contents
+        except ValueError:  # a forward reference, filled later: unknown now
+            return None
+        text = _stable_repr(value)
+        if text is None:
+            return None
+        parts.append(text)
+    return "ditherlab-" + hashlib.sha256("|".join(parts).encode()).hexdigest()[:32]
+
+
+def njit(fn=None, **options):
+    """``numba.njit(cache=True, **options)`` with a deterministic dispatcher UUID."""
     options.setdefault("cache", True)
 
     def decorate(func):
         dispatcher = numba.njit(**options)(func)
-        uuid = f"ditherlab:{func.__module__}.{func.__qualname__}:{key!r}"
-        try:
-            dispatcher._set_uuid(uuid)
-        except (AttributeError, AssertionError):  # numba internals changed: only a cache miss
-            pass
+        uuid = closure_uuid(func)
+        if uuid is not None:
+            try:
+                dispatcher._set_uuid(uuid)
+                dispatcher._ditherlab_uuid = uuid
+            except (AttributeError, AssertionError):  # numba internals changed: a cache miss
+                pass
         return dispatcher
 
     return decorate(fn) if fn is not None else decorate

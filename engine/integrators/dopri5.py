@@ -28,6 +28,7 @@ from ..jit import njit
 
 from .. import status as S
 from .events import make_locator
+from .stepsize import make_initial_step
 from .problem import (
     CFG_ATOL,
     CFG_MAX_STEPS,
@@ -168,34 +169,6 @@ def _factor(err, reject_prev):
     return fac
 
 
-def _make_initial_step(n, n_err, rhs, order):
-    """njit ``h0(t, y, f0, p, sq, y1, f1, rtol, atol, t_span) -> h`` (Hairer-Norsett-Wanner I,
-    II.4 "starting step size"; one extra evaluation)."""
-    @njit(error_model="numpy")
-    def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
-        d0 = d1 = 0.0
-        for i in range(n_err):
-            sc = atol + rtol * abs(y[i])
-            d0 += (y[i] / sc) ** 2
-            d1 += (f0[i] / sc) ** 2
-        d0, d1 = math.sqrt(d0 / n_err), math.sqrt(d1 / n_err)
-        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-        h0 = min(h0, t_span)
-        for i in range(n):
-            y1[i] = y[i] + h0 * f0[i]
-        rhs(t + h0, y1, p, sq, f1)
-        d2 = 0.0
-        for i in range(n_err):
-            d2 += ((f1[i] - f0[i]) / (atol + rtol * abs(y[i]))) ** 2
-        d2 = math.sqrt(d2 / n_err) / h0
-        if max(d1, d2) <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / order)
-        return min(100.0 * h0, h1)
-    return initial_step
-
-
 def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, n_err, rhs, observe = problem.n, problem.n_err, problem.rhs, problem.observe
@@ -203,7 +176,7 @@ def make_stepper(problem) -> Stepper:
     record, needs_mid = problem.record, problem.needs_mid
     attempt = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
-    initial_step = _make_initial_step(n, n_err, rhs, ORDER)
+    initial_step = make_initial_step(n, n_err, rhs, ORDER)
     locate = make_locator(events, n_ev, dense_eval)
     n_g = max(n_ev, 1)
 

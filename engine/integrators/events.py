@@ -20,16 +20,6 @@ def make_locator(events, n_events, dense_eval):
     the dense state at theta. Returns ``(2.0, -1)`` when no event changes sign.
     """
     @njit(error_model="numpy")
-    def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp):
-        best, idx = 2.0, -1
-        for i in range(n_events):
-            if g0[i] * g1[i] < 0.0:
-                th = _illinois(i, t, hh, y, Q, p, sq, g0[i], g1[i], ytmp, gtmp)
-                if th < best:
-                    best, idx = th, i
-        return best, idx
-
-    @njit(error_model="numpy")
     def _illinois(i, t, hh, y, Q, p, sq, fa, fb, ytmp, gtmp):
         a, b = 0.0, 1.0
         side = 0
@@ -56,5 +46,15 @@ def make_locator(events, n_events, dense_eval):
                 break
         # the root lies in [a, b]; b is on the far side, a on the near side
         return a if abs(fa) < abs(fb) else b
+
+    @njit(error_model="numpy")
+    def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp):
+        best, idx = 2.0, -1
+        for i in range(n_events):
+            if g0[i] * g1[i] < 0.0:
+                th = _illinois(i, t, hh, y, Q, p, sq, g0[i], g1[i], ytmp, gtmp)
+                if th < best:
+                    best, idx = th, i
+        return best, idx
 
     return locate

@@ -39,6 +39,7 @@ import numpy as np
 from .. import status as S
 from ..jit import njit
 from .events import make_locator
+from .stepsize import make_initial_step
 from .problem import (
     CFG_ATOL,
     CFG_MAX_STEPS,
@@ -56,7 +57,6 @@ from .rosenbrock_ops import (
     accept_divisor,
     invert,
     make_fd_jacobian,
-    make_initial_step,
     make_time_derivative,
     make_time_probe,
     step_divisor,
@@ -236,7 +236,7 @@ def make_stepper(problem) -> Stepper:
     gamma = TABLEAU.gamma
     attempt = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
-    initial_step = make_initial_step(n, n_err, rhs, ORDER)
+    initial_step = make_initial_step(n, n_err, rhs, ORDER + 1)
     jac = make_fd_jacobian(n, n_err, rhs, n_ev, events)
     dfdt = make_time_derivative(n, rhs, n_ev, events)
     depends_on_t = make_time_probe(n, n_err, rhs)

@@ -4,7 +4,6 @@
 - :func:`make_fd_jacobian`, :func:`make_time_derivative`: ``df/dy`` and ``df/dt`` by finite
   differences of the problem's right-hand side (the method protocol gives no Jacobian);
   :func:`make_time_probe` tells whether ``df/dt`` is needed at all;
-- :func:`make_initial_step`: starting step size (Hairer-Norsett-Wanner I, II.4);
 - :func:`step_divisor`, :func:`accept_divisor`: the step-size controller of Hairer's
   ``rodas.f`` (``h_new = h / fac``, ``fac`` in ``[1/6, 5]``, safety 0.9, Gustafsson's
   predictive correction after accepted steps; error exponent 1/4 for the order-3 estimate).
@@ -194,31 +193,3 @@ def accept_divisor(err, hh, h_old, err_old, rejected):
     if rejected:
         fac = max(fac, 1.0)
     return fac
-
-
-def make_initial_step(n, n_err, rhs, order):
-    """njit ``h0(t, y, f0, p, sq, y1, f1, rtol, atol, t_span) -> h`` (Hairer-Norsett-Wanner I,
-    II.4 "starting step size"; one evaluation)."""
-    @njit(error_model="numpy")
-    def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
-        d0 = d1 = 0.0
-        for i in range(n_err):
-            sc = atol + rtol * abs(y[i])
-            d0 += (y[i] / sc) ** 2
-            d1 += (f0[i] / sc) ** 2
-        d0, d1 = math.sqrt(d0 / n_err), math.sqrt(d1 / n_err)
-        h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
-        h0 = min(h0, t_span)
-        for i in range(n):
-            y1[i] = y[i] + h0 * f0[i]
-        rhs(t + h0, y1, p, sq, f1)
-        d2 = 0.0
-        for i in range(n_err):
-            d2 += ((f1[i] - f0[i]) / (atol + rtol * abs(y[i]))) ** 2
-        d2 = math.sqrt(d2 / n_err) / h0
-        if max(d1, d2) <= 1e-15:
-            h1 = max(1e-6, h0 * 1e-3)
-        else:
-            h1 = (0.01 / max(d1, d2)) ** (1.0 / (order + 1))
-        return min(100.0 * h0, h1, t_span)
-    return initial_step

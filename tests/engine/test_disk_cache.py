@@ -38,3 +38,17 @@ def test_second_process_loads_the_kernel_from_disk(tmp_path):
     assert second["hits"] == 1 and second["misses"] == 0
     assert second["v_mean"] == first["v_mean"]          # the same machine code, bit for bit
     assert list(tmp_path.glob("numba-*"))               # the cache lives where we said
+
+
+def test_distinct_closures_get_distinct_uuids():
+    """numba maps a pickled dispatcher's UUID to the live dispatcher registered under it, so
+    two kernels that differ only in a compile-time constant (here the order of the outputs)
+    must not share a UUID -- else a cache load could link the wrong one (engine/jit.py)."""
+    from engine.kernels import block_kernel
+    from engine.scene import Scene
+
+    a = Scene(friction="lugre", dither="none", method="rk4", outputs=("v_mean", "F_mean"))
+    b = a.with_(outputs=("F_mean", "v_mean"))
+    ua, ub = block_kernel(a)._ditherlab_uuid, block_kernel(b)._ditherlab_uuid
+    assert ua.startswith("ditherlab-") and ub.startswith("ditherlab-") and ua != ub
+    assert block_kernel(a.with_())._ditherlab_uuid == ua   # deterministic
