@@ -74,6 +74,7 @@ TABLEAU = ButcherTableau(
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 STRETCH = 1.01      # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
+LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
 W_H, W_REJ = 0, 1   # scalar slots of the work state
 
 
@@ -224,7 +225,11 @@ def make_stepper(problem) -> Stepper:
                 if _sign_change(G[0], G[1], n_ev):
                     coeffs(K, Q)
                     th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[2])
-                if EVENT_MARGIN < th < 1.0 - EVENT_MARGIN:
+                # a corner within round-off of t is crossed, not landed on: a landing
+                # shorter than LANDING_FLOOR (relative) that falls short would otherwise
+                # repeat forever with zero-length steps (u = v + W sin hovering at 1e-13)
+                if EVENT_MARGIN < th < 1.0 - EVENT_MARGIN and \
+                        th * hh > LANDING_FLOOR * max(1.0, abs(t)):
                     # retake the step so that it ends on the kink
                     ctr[CTR_REJECTED] += 1
                     hh = th * hh

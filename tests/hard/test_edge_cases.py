@@ -95,3 +95,16 @@ def test_sticking_for_the_whole_run():
         assert r.outputs["slip_fraction"] == 0.0
         assert r.outputs["max_stick"] == pytest.approx(8.0, rel=1e-12)
     agree(coarse, fine, ("v_mean", "F_mean"))
+
+
+def test_interface_velocity_hovering_at_zero_does_not_stall():
+    """Regression: elasto-plastic slider under sine dither (Fig. 14 grid point W = 1,
+    omega = 2000). At tau = 26.4459 u = v + W sin(omega tau) sits at -6.6e-13; a kink
+    landing that fell short by round-off was retaken with zero-length steps until the
+    step budget ran out (FAILED). A corner within round-off of t is now crossed instead."""
+    p = pack(v_ref=0.1, W=1.0, omega=2000.0, lam=0.8, slow_a=1.7, slow_omega=0.3,
+             t_end=30.0)
+    scene = Scene(friction="elastoplastic", dither="sine-velocity", outputs=("max_stick",))
+    r = simulate(scene, p, Settings(rtol=1e-4, atol=1e-7, max_steps=400_000))
+    assert r.status == 0 and r.steps + r.rejected < 400_000
+    assert np.isfinite(r.outputs["max_stick"])
