@@ -164,8 +164,10 @@ def cmd_plan(args) -> int:
         off = [k for k, v in plan.effects().items() if not v]
         print(f"effects    compiled in: {', '.join(on) or '-'}; left out: {', '.join(off) or '-'}")
         s = plan.numerics.settings
+        stops = ("; steps land on every square-wave switch"
+                 if plan.scene.dither == "square-velocity" else "")
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
-              f"atol={s.atol:g}; steps land on every square-wave switch")
+              f"atol={s.atol:g}{stops}")
     print(f"outputs    {', '.join(plan.outputs)}")
     print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
           f"phase; cluster start and first compilation come on top)")
