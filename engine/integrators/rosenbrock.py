@@ -30,6 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .tableau import highest_order
+
 TOL = 1e-12
 
 
@@ -58,13 +60,7 @@ def conditions(alpha, Gamma, b, gamma) -> list[tuple[int, float, float]]:
 
 def order_of(alpha, Gamma, b, gamma, tol: float = TOL) -> int:
     """Highest p <= 4 such that all conditions of order <= p hold to ``tol``."""
-    rows = conditions(alpha, Gamma, b, gamma)
-    p = 0
-    for order in range(1, 5):
-        if not all(abs(v - x) <= tol for o, v, x in rows if o == order):
-            break
-        p = order
-    return p
+    return highest_order(conditions(alpha, Gamma, b, gamma), 4, tol)
 
 
 @dataclass(frozen=True)

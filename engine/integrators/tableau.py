@@ -33,15 +33,20 @@ def _conditions(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> list[tuple[int, 
     return rows
 
 
-def order_of(a, b, c, tol: float = 1e-12) -> int:
-    """Highest p <= 5 such that all conditions of order <= p hold to ``tol``."""
+def highest_order(rows, max_order: int, tol: float) -> int:
+    """Highest p <= max_order such that every condition ``(order, value, exact)`` of
+    ``rows`` with order <= p holds to ``tol`` (shared by the Butcher and Rosenbrock checks)."""
     p = 0
-    for order in range(1, 6):
-        ok = all(abs(v - x) <= tol for o, v, x in _conditions(a, b, c) if o == order)
-        if not ok:
+    for order in range(1, max_order + 1):
+        if not all(abs(v - x) <= tol for o, v, x in rows if o == order):
             break
         p = order
     return p
+
+
+def order_of(a, b, c, tol: float = 1e-12) -> int:
+    """Highest p <= 5 such that all conditions of order <= p hold to ``tol``."""
+    return highest_order(_conditions(a, b, c), 5, tol)
 
 
 @dataclass(frozen=True)
