@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .tableau import highest_order
+from .tableau import freeze_arrays, highest_order
 
 TOL = 1e-12
 
@@ -91,12 +91,7 @@ class RosenbrockTableau:
     dense: np.ndarray | None = None
 
     def __post_init__(self):
-        for key in ("a", "C", "c", "d", "m", "m_hat", "dense"):
-            val = getattr(self, key)
-            if val is not None:
-                arr = np.array(val, dtype=float)
-                arr.setflags(write=False)
-                object.__setattr__(self, key, arr)
+        freeze_arrays(self, ("a", "C", "c", "d", "m", "m_hat", "dense"))
         self._check()
 
     def _check(self):

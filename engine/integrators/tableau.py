@@ -33,6 +33,16 @@ def _conditions(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> list[tuple[int, 
     return rows
 
 
+def freeze_arrays(obj, keys) -> None:
+    """Replace the fields ``keys`` of a frozen dataclass by read-only float arrays (None stays)."""
+    for key in keys:
+        val = getattr(obj, key)
+        if val is not None:
+            arr = np.array(val, dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(obj, key, arr)
+
+
 def highest_order(rows, max_order: int, tol: float) -> int:
     """Highest p <= max_order such that every condition ``(order, value, exact)`` of
     ``rows`` with order <= p holds to ``tol`` (shared by the Butcher and Rosenbrock checks)."""
@@ -72,12 +82,7 @@ class ButcherTableau:
     dense: np.ndarray | None = field(default=None, repr=False)
 
     def __post_init__(self):
-        for key in ("c", "a", "b", "b_hat", "dense"):
-            val = getattr(self, key)
-            if val is not None:
-                arr = np.array(val, dtype=float)
-                arr.setflags(write=False)
-                object.__setattr__(self, key, arr)
+        freeze_arrays(self, ("c", "a", "b", "b_hat", "dense"))
         self._check()
 
     def _check(self):
