@@ -90,7 +90,7 @@ def _make_attempt(tab, n, n_err, rhs):
     c2, c3, c4, c5 = c[1], c[2], c[3], c[4]
     e1, e3, e4, e5, e6, e7 = e[0], e[2], e[3], e[4], e[5], e[6]
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def attempt(t, hh, y, p, sq, K, Y, rtol, atol):
         k1, k2, k3, k4, k5, k6, k7 = K[0], K[1], K[2], K[3], K[4], K[5], K[6]
         yt, yn = Y[0], Y[1]
@@ -130,7 +130,7 @@ def _make_dense(tab, n):
     rows = tuple(tuple(float(x) for x in P[:, j]) for j in range(P.shape[1]))
     d0, d1, d2, d3 = rows
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def coeffs(K, Q):
         for i in range(n):
             Q[0, i] = (d0[0] * K[0, i] + d0[2] * K[2, i] + d0[3] * K[3, i] + d0[4] * K[4, i]
@@ -142,7 +142,7 @@ def _make_dense(tab, n):
             Q[3, i] = (d3[0] * K[0, i] + d3[2] * K[2, i] + d3[3] * K[3, i] + d3[4] * K[4, i]
                        + d3[5] * K[5, i] + d3[6] * K[6, i])
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def dense_eval(y, hh, Q, th, out):
         for i in range(n):
             out[i] = y[i] + hh * th * (Q[0, i] + th * (Q[1, i] + th * (Q[2, i] + th * Q[3, i])))
@@ -150,7 +150,7 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def _sign_change(g0, g1, m):
     """True if any of the first m event functions changed sign (a zero is no change)."""
     for i in range(m):
@@ -159,7 +159,7 @@ def _sign_change(g0, g1, m):
     return False
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def _factor(err, reject_prev):
     """I-controller step factor for error ``err`` (non-finite -> FAC_MIN)."""
     if not math.isfinite(err):
@@ -188,7 +188,7 @@ def make_stepper(problem) -> Stepper:
         return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((3, n_g)),
                 np.zeros(2))
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         K, Y, Q, G, state = work
         rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]

@@ -38,7 +38,7 @@ def make_solve(stepper, observer, dither: str):
     grid = square or (kind != NONE and observer.period_stops)
     segment, start, stop = stepper.segment, observer.start, observer.stop
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def solve(work, y, p, cfg, obs, ctr, rec):
         t_end, t_tr, omega = p[P.T_END], p[P.T_TRANSIENT], p[P.OMEGA]
         cfg[CFG_H] = _nominal_step(kind, omega, cfg)
@@ -78,7 +78,7 @@ def make_solve(stepper, observer, dither: str):
     return solve
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def _nominal_step(kind, omega, cfg):
     n = cfg[CFG_STEPS_PER_PERIOD]
     if not omega > 0.0 or not np.isfinite(omega):   # no period to divide: Settings.h

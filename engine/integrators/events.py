@@ -19,7 +19,7 @@ def make_locator(events, n_events, dense_eval):
     ``g0``/``g1``: event values at theta = 0 / 1; ``dense_eval(y, hh, Q, theta, out)`` writes
     the dense state at theta. Returns ``(2.0, -1)`` when no event changes sign.
     """
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def _illinois(i, t, hh, y, Q, p, sq, fa, fb, ytmp, gtmp):
         a, b = 0.0, 1.0
         side = 0
@@ -47,7 +47,7 @@ def make_locator(events, n_events, dense_eval):
         # the root lies in [a, b]; b is on the far side, a on the near side
         return a if abs(fa) < abs(fb) else b
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp):
         best, idx = 2.0, -1
         for i in range(n_events):

@@ -51,7 +51,7 @@ def make_stepper(problem) -> Stepper:
     def alloc():
         return np.empty((7, n))
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         k1, k2, k3, k4, yt, y0, ym = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
         m = max(1, math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12)))

@@ -136,7 +136,7 @@ def _make_attempt(tab, n, n_err, rhs):
     t2, t3, t4 = c[1], c[2], c[3]
     d1, d2, d3, d4 = d[0], d[1], d[2], d[3]
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def solve(Minv, r, Ui):
         for k in range(n):
             acc = 0.0
@@ -144,7 +144,7 @@ def _make_attempt(tab, n, n_err, rhs):
                 acc += Minv[k, j] * r[j]
             Ui[k] = acc
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def attempt(t, hh, y, f0, ft, tdep, Minv, p, sq, U, yt, r, yn, rtol, atol):
         ih = 1.0 / hh
         dh = hh if tdep else 0.0
@@ -201,7 +201,7 @@ def _make_dense(tab, n):
     D = tab.dense.copy()
     s = tab.stages
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def coeffs(y, yn, U, Q):
         for k in range(n):
             q1 = q2 = 0.0
@@ -210,7 +210,7 @@ def _make_dense(tab, n):
                 q2 += D[1, i] * U[i, k]
             Q[0, k], Q[1, k], Q[2, k] = yn[k] - y[k], q1, q2
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def dense_eval(y, hh, Q, th, out):
         for k in range(n):
             out[k] = y[k] + th * (Q[0, k] + (1.0 - th) * (Q[1, k] + th * Q[2, k]))
@@ -218,7 +218,7 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def _sign_change(g0, g1, m):
     """True if any of the first m event functions changed sign (a zero is no change)."""
     for i in range(m):
@@ -251,7 +251,7 @@ def make_stepper(problem) -> Stepper:
         return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((4, n_g)),
                 np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(6))
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def factor(J, M, Minv, hh):
         for i in range(n):
             for j in range(n):
@@ -259,7 +259,7 @@ def make_stepper(problem) -> Stepper:
             M[i, i] += 1.0 / (hh * gamma)
         return invert(M, Minv)
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def restart(t0, t1, y, p, sq, fresh, work, rtol, atol):
         """Events at t0; at the first segment of a point or after a switch a new h."""
         Y, G, state = work[1], work[3], work[7]
@@ -274,7 +274,7 @@ def make_stepper(problem) -> Stepper:
         state[W_SHORT] = 0.0
         return 6 if fresh == FRESH_START else 2
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
         """Factor and attempt one step of size hh from (t, y); err (inf if singular)."""
         U, Y, J, M, Minv, state = work[0], work[1], work[4], work[5], work[6], work[7]
@@ -284,7 +284,7 @@ def make_stepper(problem) -> Stepper:
         return attempt(t, hh, y, Y[4], Y[5], state[W_TDEP] != 0.0, Minv, p, sq, U, Y[0],
                        Y[6], Y[1], rtol, atol)
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def land(t, hh, err, y, p, sq, work, rtol, atol, ctr):
         """After an accepted trial of size hh: if an event changed sign, retake the step so
         that it ends on the earliest root (the trial counts as rejected), as dopri5 does.
@@ -313,7 +313,7 @@ def make_stepper(problem) -> Stepper:
             # one that rounding cannot reach (u = v - W stuck one ulp short) is passed
         return hh, err, True
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         U, Y, Q, G, J, state = work[0], work[1], work[2], work[3], work[4], work[7]
         yn, ym, f0, ft = Y[1], Y[2], Y[4], Y[5]

@@ -19,7 +19,7 @@ from ..jit import njit
 SAFETY, FAC_LO, FAC_HI = 0.9, 1.0 / 6.0, 5.0   # h_new = h / fac, fac in [FAC_LO, FAC_HI]
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def invert(M, Minv):
     """``Minv = M^-1`` by Gauss-Jordan elimination with partial pivoting (``M`` is destroyed).
 
@@ -59,7 +59,7 @@ def invert(M, Minv):
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def _crossed(g0, g1, m):
     """True if an event function changed sign between g0 and g1 (g0 == 0: at the kink, no)."""
     for i in range(m):
@@ -79,7 +79,7 @@ def make_fd_jacobian(n, n_err, rhs, n_events, events):
     ``jump / increment ~ 1e12`` and was measured to freeze the slider in a wrong stick, with
     a small error estimate, since both embedded solutions share the Jacobian.
     """
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def jac(t, y, f0, p, sq, J, yt, ft, floor, g0, g1):
         for k in range(n):
             yt[k] = y[k]
@@ -119,7 +119,7 @@ def make_time_derivative(n, rhs, n_events, events):
     eps = float(np.finfo(float).eps)
     cbrt_eps = eps ** (1.0 / 3.0)
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def dfdt(t, y, f0, p, sq, hh, ft, yt, g0, g1):
         d = max(cbrt_eps * hh, 64.0 * eps * abs(t))
         t_hi, t_lo = t + d, t - d
@@ -156,7 +156,7 @@ def make_time_probe(n, n_err, rhs):
     (measured: a wrong answer at rtol 1e-8 when only ``y`` was probed). Four evaluations,
     once per point; a non-finite probe counts as dependent. ``fa``, ``fb``, ``yt``: scratch.
     """
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def depends_on_t(t, y, p, sq, fa, fb, yt):
         for k in range(n):
             yt[k] = y[k]
@@ -173,7 +173,7 @@ def make_time_probe(n, n_err, rhs):
     return depends_on_t
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def step_divisor(err):
     """Step divisor for error ``err`` (non-finite -> the largest cut)."""
     if not math.isfinite(err):
@@ -181,7 +181,7 @@ def step_divisor(err):
     return min(FAC_HI, max(FAC_LO, err ** 0.25 / SAFETY))
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
 def accept_divisor(err, hh, h_old, err_old, rejected):
     """Gustafsson's predictive divisor after an accepted step of size ``hh`` with error
     ``err``, given the previous accepted step ``h_old`` (0: none) and its ``err_old``;

@@ -18,7 +18,7 @@ def make_initial_step(n, n_err, rhs, error_order):
 
     ``n_err`` leading components are under error control; ``y1``, ``f1`` are scratch rows.
     """
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", refcount=False)
     def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
         d0 = d1 = 0.0
         for i in range(n_err):
