@@ -30,8 +30,10 @@ class Simulation:
     steps, rejected, evals : accepted steps, rejected (or retaken) steps, RHS evaluations.
     y_end : final state ``(n,)``.
     alpha_hist : time shares of alpha in 20 bins of [0, 1], when ``"alpha_hist"`` was asked.
-    t, y : recorded step end times ``(k,)`` and states ``(k, n)`` when ``record=True``
-        (every ``record_every``-th accepted step; includes all stops when ``record_every=1``).
+    t, y : recorded times ``(k,)`` and states ``(k, n)`` when ``record=True``: every
+        ``record_every``-th accepted step end (all stops included when ``record_every=1``),
+        or with ``record_dt`` the instants ``j * record_dt >= record_from`` from the
+        method's dense output (the steps are not shortened to hit them).
     truncated : True when the recording buffer filled up before the end.
     """
 
@@ -48,7 +50,8 @@ class Simulation:
 
 
 def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool = False,
-             record_every: int = 1, max_records: int = 2_000_000) -> Simulation:
+             record_every: int = 1, record_dt: float | None = None, record_from: float = 0.0,
+             max_records: int = 2_000_000) -> Simulation:
     """Integrate one trajectory of ``scene`` with parameters ``p`` from ``(e0, v0, z0)``.
 
     Parameters
@@ -58,6 +61,9 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     settings : tolerances / steps (default ``Settings()``).
     record : keep ``(t, y)`` of every ``record_every``-th accepted step, at most
         ``max_records`` rows (API only; the batch path never records).
+    record_dt, record_from : instead, keep ``(t, y)`` at the uniform instants
+        ``j * record_dt`` in ``[record_from, t_end]``, interpolated by the method's
+        continuous extension (order 4 for dopri5 and rodas4, 3 for rk4); implies ``record``.
     """
     if scene.method in ANALYSIS_METHODS:
         raise ValueError(f"scene.method: simulate() integrates in time; {scene.method!r} is "
@@ -65,8 +71,12 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     p = P.pack(**p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
-    pk = point_kernel(scene)
-    cfg = settings_to_cfg(settings or Settings(), record_every)
+    if record_dt is not None and not record_dt > 0.0:
+        raise ValueError(f"record_dt must be > 0 (time units), got {record_dt}")
+    sampled = record_dt is not None
+    record = record or sampled
+    pk = point_kernel(scene, sampled_record=sampled)
+    cfg = settings_to_cfg(settings or Settings(), record_every, record_dt or 0.0, record_from)
     y, obs = np.empty(pk.n), np.empty(pk.obs_size)
     out = np.empty(len(pk.names))
     ctr = np.zeros(CTR_SIZE, dtype=np.int64)

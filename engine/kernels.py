@@ -3,7 +3,9 @@
 Everything a Scene switches off is absent from the compiled code (its flags are Python
 constants closed over by the njit factories). Kernels are cached with
 ``functools.lru_cache`` on the (hashable, frozen) Scene; a worker process compiles each
-scene once. Recording steps (API only) is a run-time choice: an empty ``rec`` array.
+scene once. Recording steps (API only) is a run-time choice: an empty ``rec`` array;
+recording at uniform instants from the dense output is a compile-time one
+(``point_kernel(scene, sampled_record=True)``), so the batch path never carries it.
 """
 from __future__ import annotations
 
@@ -24,10 +26,13 @@ from .integrators.problem import (
     CFG_MAX_STEPS,
     CFG_RECORD_EVERY,
     CFG_RTOL,
+    CFG_SAMPLE_DT,
+    CFG_SAMPLE_T0,
     CFG_SIZE,
     CFG_STEPS_PER_PERIOD,
     CTR_SIZE,
     Problem,
+    record_sample,
 )
 from .observables import make_observer
 from .settings import Settings
@@ -44,9 +49,12 @@ class PointKernel(NamedTuple):
     run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
 
 
-def settings_to_cfg(settings: Settings, record_every: int = 1) -> np.ndarray:
-    """Pack :class:`Settings` into the float64 ``cfg`` array of the kernels."""
+def settings_to_cfg(settings: Settings, record_every: int = 1, sample_dt: float = 0.0,
+                    sample_t0: float = 0.0) -> np.ndarray:
+    """Pack :class:`Settings` (and the API's recording choices) into the float64 ``cfg``
+    array of the kernels."""
     cfg = np.zeros(CFG_SIZE)
+    cfg[CFG_SAMPLE_DT], cfg[CFG_SAMPLE_T0] = sample_dt, sample_t0
     cfg[CFG_RTOL], cfg[CFG_ATOL] = settings.rtol, settings.atol
     cfg[CFG_MAX_STEPS] = settings.max_steps
     cfg[CFG_STEPS_PER_PERIOD] = settings.steps_per_period
@@ -64,14 +72,26 @@ def method_module(scene):
                          f"known: {sorted(METHODS)} (or 'averaged', 'hbm')") from None
 
 
+@njit(error_model="numpy", refcount=False)
+def _record_instant(t, y, p, sq, obs, ctr, rec):
+    """The sampling hook of a ``sampled_record`` kernel: one row of ``rec`` per instant."""
+    record_sample(t, y, ctr, rec)
+
+
 @cache
-def point_kernel(scene) -> PointKernel:
-    """Build (once per process) the one-point integrator of ``scene``."""
+def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
+    """Build (once per process) the one-point integrator of ``scene``.
+
+    ``sampled_record``: ``rec`` receives the state at the instants ``k cfg[CFG_SAMPLE_DT]``
+    (dense output, no stops) instead of every ``cfg[CFG_RECORD_EVERY]``-th step end.
+    """
     system = make_system(scene)
     observer = make_observer(scene, system)
     problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
                       n_events=system.n_events, events=system.events,
-                      observe=observer.observe, record=True, needs_mid=observer.needs_mid)
+                      observe=observer.observe, record=not sampled_record,
+                      needs_mid=observer.needs_mid, sampling=sampled_record,
+                      sample=_record_instant)
     stepper = method_module(scene).make_stepper(problem)
     solve = make_solve(stepper, observer, scene.dither)
     init, obs_init, finish = system.init, observer.init, observer.finish

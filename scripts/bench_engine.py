@@ -134,14 +134,29 @@ def engine_params(W: float):
     return P.pack(v_ref=V_REF, W=W, omega=OMEGA, t_end=T_END, t_transient=0.0)
 
 
-def qoi_observer():
-    """An engine Observer that samples v at the switching instants in [T_WIN, T_END]
-    (the driver's stop hook) and writes q = [z, e, v, mean v, p2p v] at the end -- the
-    anchor's QoI; the engine's own observables average over time, not over instants."""
+def _qoi_accumulate(t, v, obs):
+    """Add the sample v(t) to the anchor's mean / extremes when t is in the window."""
+    if t >= T_WIN:
+        obs[0] += v
+        obs[1] += 1.0
+        obs[2] = min(obs[2], v)
+        obs[3] = max(obs[3], v)
+
+
+def qoi_observer(sampled: bool):
+    """An engine Observer for the anchor's QoI ``q = [z, e, v, mean v, p2p v]`` (the mean
+    and peak-to-peak over the switching instants ``k pi / omega`` in [T_WIN, T_END]; the
+    engine's own observables average over time, not over instants).
+
+    ``sampled=False``: v is taken at the driver's stops (the scene stops at every switch).
+    ``sampled=True``: the stop hook does nothing; ``sample`` (returned too) is the
+    integrator's dense-output sampling hook, called at the instants without stopping.
+    """
     from numba import njit
 
     from engine.observables import Observer
     from engine.systems.slider import E, V, Z
+    accumulate = njit(_qoi_accumulate)
 
     @njit
     def init(obs):
@@ -157,12 +172,12 @@ def qoi_observer():
 
     @njit
     def stop(t, y, p, is_period, obs):
-        if t >= T_WIN:
-            v = y[V]
-            obs[0] += v
-            obs[1] += 1.0
-            obs[2] = min(obs[2], v)
-            obs[3] = max(obs[3], v)
+        if not sampled:
+            accumulate(t, y[V], obs)
+
+    @njit
+    def sample(t, y, p, sq, obs, ctr, rec):
+        accumulate(t, y[V], obs)
 
     @njit
     def finish(t, y, p, obs, out):
@@ -171,14 +186,20 @@ def qoi_observer():
         out[4] = obs[3] - obs[2]
 
     names = ("z", "e", "v", "v_mean_switch", "v_p2p_switch")
-    return Observer(4, names, False, False, init, start, observe, stop, finish)
+    return Observer(4, names, False, False, init, start, observe, stop, finish), sample
 
 
 class EngineQoI:
     """One compiled engine trajectory per method with the QoI observer above, built from the
-    engine's own pieces (systems, integrator METHODS, shared driver)."""
+    engine's own pieces (systems, integrator METHODS, shared driver).
 
-    def __init__(self, method: str):
+    ``dense=False``: the square-wave scene (W = 0 for "nodither"), stopping at every switch
+    as the anchor's rk4/dp5 do. ``dense=True`` (adaptive methods, "nodither" only): the
+    scene without dither -- no stops at all -- and v sampled at the switching instants
+    from the dense output (``Problem.sampling``), as the anchor's dp5dense does.
+    """
+
+    def __init__(self, method: str, dense: bool = False):
         from numba import njit
 
         from engine import params as P
@@ -189,14 +210,14 @@ class EngineQoI:
         from engine.scene import Scene
         from engine.systems import make_system
 
-        # W = 0 keeps the square-wave scene so that both scenes stop at every switch (as
-        # the anchor's rk4/dp5 do); the physics is that of dither "none".
-        scene = Scene(method=method, slow_force=False, outputs=())
+        scene = Scene(method=method, slow_force=False, outputs=(),
+                      dither="none" if dense else "square-velocity")
         system = make_system(scene)
-        obs = qoi_observer()
+        obs, sample = qoi_observer(sampled=dense)
         problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
                           n_events=system.n_events, events=system.events,
-                          observe=obs.observe, record=False, needs_mid=False)
+                          observe=obs.observe, record=False, needs_mid=False,
+                          sampling=dense, sample=sample)
         stepper = METHODS[method].make_stepper(problem)
         solve = make_solve(stepper, obs, scene.dither)
         init, obs_init, finish, n = system.init, obs.init, obs.finish, system.n
@@ -211,7 +232,8 @@ class EngineQoI:
             finish(p[i_end], y, p, o, out)
             return st
 
-        self.method, self.run_jit, self.ok = method, run, S.OK
+        self.method, self.dense, self.run_jit, self.ok = method, dense, run, S.OK
+        self.label = method + (" dense" if dense else "")
         self.work = stepper.alloc()
         self.y, self.o, self.out = np.empty(n), np.empty(4), np.empty(5)
         self.ctr = np.zeros(CTR_SIZE, np.int64)
@@ -219,11 +241,16 @@ class EngineQoI:
         self.adaptive = METHODS[method].ADAPTIVE
 
     def cfg(self, setting):
+        from engine.integrators.problem import CFG_SAMPLE_DT, CFG_SAMPLE_T0
         from engine.kernels import settings_to_cfg
         from engine.settings import Settings
         if self.adaptive:
-            return settings_to_cfg(Settings(rtol=setting, atol=1e-2 * setting))
-        return settings_to_cfg(Settings(steps_per_period=int(setting)))
+            cfg = settings_to_cfg(Settings(rtol=setting, atol=1e-2 * setting))
+        else:
+            cfg = settings_to_cfg(Settings(steps_per_period=int(setting)))
+        if self.dense:
+            cfg[CFG_SAMPLE_DT], cfg[CFG_SAMPLE_T0] = math.pi / OMEGA, T_WIN
+        return cfg
 
     def runner(self, W, setting):
         """Zero-argument callable running one trajectory (for the timing loop)."""
@@ -241,7 +268,8 @@ class EngineQoI:
 # --------------------------------------------------------------------------- table 1
 RK4_N = (1, 2, 3, 4, 6, 8, 12, 16, 24, 32, 48, 64, 96, 128)
 RTOLS = tuple(10.0 ** (-k / 2) for k in range(6, 27))          # 1e-3 ... 1e-13
-C_OF = {"rk4": "rk4", "dopri5": "dp5"}                           # same algorithm in C
+C_OF = {"rk4": "rk4", "dopri5": "dp5", "dopri5 dense": "dp5dense"}   # same algorithm in C
+DENSE_SCENES = ("nodither",)        # scenes where the engine also runs without stops
 C_ONLY = ("dp5dense",)                                           # C's no-stop variant
 
 
@@ -278,8 +306,9 @@ def table_speed(anchor: Anchor, methods, refs, repeats: int):
     ``ratio`` = engine / C of the same algorithm, each at its own cheapest setting;
     ``ratio_same`` = engine / C at the engine's setting (same steps: implementation cost).
     """
-    engines = {m: EngineQoI(m) for m in methods}
-    for eng in engines.values():                       # compile outside the timings
+    engines = [EngineQoI(m) for m in methods]
+    engines += [EngineQoI(e.method, dense=True) for e in engines if e.adaptive]
+    for eng in engines:                                # compile outside the timings
         eng.run(0.4, settings_for(eng.method)[0])
     rows = []
     for scene, W in SCENES.items():
@@ -287,8 +316,11 @@ def table_speed(anchor: Anchor, methods, refs, repeats: int):
             c_hits = c_cheapest(anchor, W, refs[scene], acc)
             c_fns = {cm: (lambda cm=cm, s=h[0], W=W: anchor.run(cm, W, s))
                      for cm, h in c_hits.items()}
-            for m, eng in engines.items():
-                hit = cheapest(lambda s, eng=eng, W=W: eng.run(W, s), settings_for(m),
+            for eng in engines:
+                if eng.dense and scene not in DENSE_SCENES:
+                    continue
+                m = eng.label
+                hit = cheapest(lambda s, eng=eng, W=W: eng.run(W, s), settings_for(eng.method),
                                refs[scene], acc)
                 if hit is None:
                     rows.append({"scene": scene, "acc": acc, "method": m,

@@ -31,7 +31,13 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
       empty function when no observable needs per-step data);
     - ``record``: when True call ``record_step`` after each accepted step (it is a run-time
       no-op for the empty ``rec`` of the batch path);
-    - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation).
+    - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation);
+    - ``sampling`` and ``sample(t, y, p, sq, obs, ctr, rec)``: when True, call ``sample``
+      at every instant ``k * cfg[CFG_SAMPLE_DT] >= cfg[CFG_SAMPLE_T0]`` with the state
+      from the method's continuous extension, *without* shortening any step to reach it
+      (:func:`engine.integrators.problem.make_sampler` does the bookkeeping; the method
+      keeps the next ``k`` in its work state and sets it on ``FRESH_START``). This is how
+      a scene without stops is observed at given instants (``simulate(record_dt=...)``).
 
     It returns ``Stepper(alloc, segment)``, two njit functions:
 

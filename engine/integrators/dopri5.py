@@ -33,12 +33,15 @@ from .problem import (
     CFG_ATOL,
     CFG_MAX_STEPS,
     CFG_RTOL,
+    CFG_SAMPLE_DT,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
     FRESH_NONE,
     FRESH_START,
     Stepper,
+    make_sampler,
+    no_sample,
     record_step,
 )
 from .tableau import ButcherTableau
@@ -75,7 +78,7 @@ SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 STRETCH = 1.01      # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
 LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
-W_H, W_REJ = 0, 1   # scalar slots of the work state
+W_H, W_REJ, W_K = 0, 1, 2   # work state: step size, reject flag, next sampling index
 
 
 def _make_attempt(tab, n, n_err, rhs):
@@ -174,19 +177,20 @@ def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, n_err, rhs, observe = problem.n, problem.n_err, problem.rhs, problem.observe
     n_ev, events = problem.n_events, problem.events
-    record, needs_mid = problem.record, problem.needs_mid
+    record, needs_mid, sampling = problem.record, problem.needs_mid, problem.sampling
     attempt = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     initial_step = make_initial_step(n, n_err, rhs, ORDER)
     locate = make_locator(events, n_ev, dense_eval)
+    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(inline="always", error_model="numpy")
     def alloc():
         # K: stages k1..k7; Y: yt, yn, ymid, ytmp; Q: dense coefficients;
-        # G: event values at step start / end / scratch; state: h, reject flag
+        # G: event values at step start / end / scratch; state: the W_* slots
         return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((3, n_g)),
-                np.zeros(2))
+                np.zeros(3))
 
     @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
@@ -201,6 +205,8 @@ def make_stepper(problem) -> Stepper:
                 state[W_H] = initial_step(t0, y, K[0], p, sq, Y[0], K[1], rtol, atol, t1 - t0)
                 state[W_REJ] = 0.0
                 ctr[CTR_EVALS] += 1
+                if sampling:
+                    state[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
         h = state[W_H]
         t = t0
         while t < t1:
@@ -251,6 +257,10 @@ def make_stepper(problem) -> Stepper:
                 dense_eval(y, hh, Q, 0.5, Y[2])
             t_new = t1 if last else t + hh
             observe(t, y, t_new, Y[1], Y[2], p, sq, obs)
+            if sampling and state[W_K] * cfg[CFG_SAMPLE_DT] <= t_new:
+                coeffs(K, Q)
+                state[W_K] = emit(t, hh, t_new, y, Y[1], Q, p, sq, cfg, obs, ctr, rec,
+                                  state[W_K], Y[3])
             for i in range(n):
                 y[i] = Y[1, i]
                 K[0, i] = K[6, i]

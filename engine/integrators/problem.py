@@ -5,6 +5,7 @@ See the protocol in :mod:`engine.integrators`.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
@@ -18,7 +19,9 @@ CFG_MAX_STEPS = 3   # budget of accepted + rejected steps
 CFG_STEPS_PER_PERIOD = 4   # Settings.steps_per_period (read by the driver to set CFG_H)
 CFG_H_FREE = 5      # Settings.h, the fixed step without dither (read by the driver)
 CFG_RECORD_EVERY = 6       # API recording: keep every m-th accepted step
-CFG_SIZE = 7
+CFG_SAMPLE_DT = 7   # spacing of the sampling instants k * dt (problem.sampling; <= 0: none)
+CFG_SAMPLE_T0 = 8   # no sampling instant before this time
+CFG_SIZE = 9
 
 # ctr: int64 counters of one point
 CTR_STEPS = 0       # accepted steps
@@ -44,6 +47,8 @@ class Problem(NamedTuple):
     observe: Callable      # observe(t0, y0, t1, y1, ymid, p, sq, obs)
     record: bool = True    # call record_step (a run-time no-op for an empty rec)
     needs_mid: bool = True # observe reads ymid (else methods may pass any array)
+    sampling: bool = False # call sample at the instants k * cfg[CFG_SAMPLE_DT] (dense output)
+    sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
 
 
 class Stepper(NamedTuple):
@@ -54,7 +59,18 @@ class Stepper(NamedTuple):
     extra: Any = None      # method-specific helpers (e.g. dense output), optional
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", refcount=False)
+def record_sample(t, y, ctr, rec):
+    """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec``; silently stops when full."""
+    i = ctr[CTR_NREC]
+    if i < rec.shape[0]:
+        rec[i, 0] = t
+        for j in range(y.size):
+            rec[i, 1 + j] = y[j]
+        ctr[CTR_NREC] = i + 1
+
+
+@njit(error_model="numpy", refcount=False)
 def record_step(rec, ctr, cfg, t, y):
     """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec`` (shape ``(capacity, 1 + n)``)
     for every ``cfg[CFG_RECORD_EVERY]``-th accepted step; call after counting the step.
@@ -62,9 +78,51 @@ def record_step(rec, ctr, cfg, t, y):
     silently stops when ``rec`` is full (the API reports truncation)."""
     if rec.shape[0] == 0 or ctr[CTR_STEPS] % max(1, int(cfg[CFG_RECORD_EVERY])) != 0:
         return
-    i = ctr[CTR_NREC]
-    if i < rec.shape[0]:
-        rec[i, 0] = t
-        for j in range(y.size):
-            rec[i, 1 + j] = y[j]
-        ctr[CTR_NREC] = i + 1
+    record_sample(t, y, ctr, rec)
+
+
+@njit(error_model="numpy", refcount=False)
+def no_sample(t, y, p, sq, obs, ctr, rec):
+    """The ``sample`` hook of a problem without sampling (never called)."""
+
+
+def make_sampler(sample, dense_eval):
+    """Sampling at requested instants from a method's dense output, without stopping there.
+
+    The instants are ``t_k = k * dt`` (``dt = cfg[CFG_SAMPLE_DT]``, computed from ``k``,
+    never accumulated) with ``t_k >= cfg[CFG_SAMPLE_T0]``. A method keeps the next ``k``
+    (a float) in its work state and, after each accepted step ``(t, t_new]`` that holds an
+    instant, calls ``emit``; ``dense_eval(y, hh, Q, theta, out)`` is its continuous
+    extension on that step (``Q`` its coefficients, valid for the accepted step).
+
+    Returns njit ``first(t0, y, p, sq, cfg, obs, ctr, rec) -> k`` (the first index at or
+    after ``t0``, sampling ``t0`` itself when it is an instant; ``inf`` when ``dt <= 0``) and
+    ``emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec, k, ytmp) -> k``. An instant
+    equal to ``t_new`` takes the step-end state ``yn`` (no interpolation error).
+    """
+    @njit(error_model="numpy", refcount=False)
+    def first(t0, y, p, sq, cfg, obs, ctr, rec):
+        dt = cfg[CFG_SAMPLE_DT]
+        if not dt > 0.0:
+            return math.inf
+        k = math.ceil(max(t0, cfg[CFG_SAMPLE_T0]) / dt)
+        if k * dt == t0:
+            sample(t0, y, p, sq, obs, ctr, rec)
+            k += 1
+        return float(k)
+
+    @njit(error_model="numpy", refcount=False)
+    def emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec, k, ytmp):
+        dt = cfg[CFG_SAMPLE_DT]
+        ts = k * dt
+        while ts <= t_new:
+            if ts == t_new:
+                sample(ts, yn, p, sq, obs, ctr, rec)
+            else:
+                dense_eval(y, hh, Q, (ts - t) / hh, ytmp)
+                sample(ts, ytmp, p, sq, obs, ctr, rec)
+            k += 1.0
+            ts = k * dt
+        return k
+
+    return first, emit

@@ -4,8 +4,9 @@ Each segment ``[t0, t1]`` between stops is split into ``m = ceil((t1 - t0) / h)`
 steps with ``h = cfg[CFG_H]`` set by the driver, so a square-wave half-period holds exactly
 ``Settings.steps_per_period`` steps and the last step lands on ``t1`` by assignment.
 Kinks of the right-hand side inside a step are not located (fixed step): near them the
-error is of lower order. The midpoint passed to observers comes from the third-order
-continuous extension (dense weights in :data:`TABLEAU`).
+error is of lower order. The midpoint passed to observers, and the states at sampling
+instants (``problem.sampling``), come from the third-order continuous extension (dense
+weights in :data:`TABLEAU`).
 """
 from __future__ import annotations
 
@@ -15,7 +16,19 @@ import numpy as np
 from ..jit import njit
 
 from .. import status as S
-from .problem import CFG_H, CFG_MAX_STEPS, CTR_EVALS, CTR_REJECTED, CTR_STEPS, Stepper, record_step
+from .problem import (
+    CFG_H,
+    CFG_MAX_STEPS,
+    CFG_SAMPLE_DT,
+    CTR_EVALS,
+    CTR_REJECTED,
+    CTR_STEPS,
+    FRESH_START,
+    Stepper,
+    make_sampler,
+    no_sample,
+    record_step,
+)
 from .tableau import ButcherTableau
 
 NAME = "rk4"
@@ -38,10 +51,31 @@ def _mid_weights(tab: ButcherTableau) -> tuple:
     return tuple(float(w) for w in tab.dense @ th)
 
 
+def _make_dense(tab, n):
+    """njit ``coeffs(k1, k2, k3, k4, Q)`` and ``dense_eval(y, hh, Q, th, out)``:
+    ``y(t + th h) = y + h th (Q0 + th (Q1 + th Q2))``, ``Q_j = sum_i dense[i, j] k_i``."""
+    D = tab.dense.copy()
+
+    @njit(error_model="numpy", refcount=False)
+    def coeffs(k1, k2, k3, k4, Q):
+        for j in range(3):
+            for i in range(n):
+                Q[j, i] = D[0, j] * k1[i] + D[1, j] * k2[i] + D[2, j] * k3[i] + D[3, j] * k4[i]
+
+    @njit(error_model="numpy", refcount=False)
+    def dense_eval(y, hh, Q, th, out):
+        for i in range(n):
+            out[i] = y[i] + hh * th * (Q[0, i] + th * (Q[1, i] + th * Q[2, i]))
+
+    return coeffs, dense_eval
+
+
 def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, rhs, observe = problem.n, problem.rhs, problem.observe
-    record, needs_mid = problem.record, problem.needs_mid
+    record, needs_mid, sampling = problem.record, problem.needs_mid, problem.sampling
+    coeffs, dense_eval = _make_dense(TABLEAU, n)
+    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
     a21, a32, a43 = (float(TABLEAU.a[1, 0]), float(TABLEAU.a[2, 1]), float(TABLEAU.a[3, 2]))
     b1, b2, b3, b4 = (float(x) for x in TABLEAU.b)
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
@@ -49,11 +83,15 @@ def make_stepper(problem) -> Stepper:
 
     @njit(inline="always", error_model="numpy")
     def alloc():
-        return np.empty((7, n))
+        # rows k1..k4, yt, y0, ym, ytmp; Q: dense coefficients; state[0]: next sampling index
+        return np.empty((8, n)), np.empty((3, n)), np.zeros(1)
 
     @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
-        k1, k2, k3, k4, yt, y0, ym = work[0], work[1], work[2], work[3], work[4], work[5], work[6]
+        R, Q, state = work
+        k1, k2, k3, k4, yt, y0, ym, ytmp = R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7]
+        if sampling and fresh == FRESH_START:
+            state[0] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
         m = max(1, math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12)))
         h = (t1 - t0) / m
         for j in range(m):
@@ -77,6 +115,10 @@ def make_stepper(problem) -> Stepper:
             ctr[CTR_STEPS] += 1
             ctr[CTR_EVALS] += 4
             observe(t, y0, t_new, y, ym, p, sq, obs)
+            if sampling and state[0] * cfg[CFG_SAMPLE_DT] <= t_new:
+                coeffs(k1, k2, k3, k4, Q)
+                state[0] = emit(t, h, t_new, y0, y, Q, p, sq, cfg, obs, ctr, rec, state[0],
+                                ytmp)
             if record and rec.shape[0] > 0:
                 record_step(rec, ctr, cfg, t_new, y)
             if ctr[CTR_STEPS] + ctr[CTR_REJECTED] > cfg[CFG_MAX_STEPS]:

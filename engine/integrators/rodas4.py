@@ -44,12 +44,15 @@ from .problem import (
     CFG_ATOL,
     CFG_MAX_STEPS,
     CFG_RTOL,
+    CFG_SAMPLE_DT,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
     FRESH_NONE,
     FRESH_START,
     Stepper,
+    make_sampler,
+    no_sample,
     record_step,
 )
 from .rosenbrock import RosenbrockTableau
@@ -98,7 +101,7 @@ STRETCH = 1.01       # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
 MAX_SHORT = 2        # landings in a row that fall short of the same kink before it is passed
 # scalar slots of the work state
-W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP, W_SHORT = 0, 1, 2, 3, 4, 5
+W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP, W_SHORT, W_K = 0, 1, 2, 3, 4, 5, 6  # W_K: next sample
 
 
 def _check_layout(tab):
@@ -241,6 +244,8 @@ def make_stepper(problem) -> Stepper:
     dfdt = make_time_derivative(n, rhs, n_ev, events)
     depends_on_t = make_time_probe(n, n_err, rhs)
     locate = make_locator(events, n_ev, dense_eval)
+    sampling = problem.sampling
+    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(error_model="numpy")
@@ -249,7 +254,7 @@ def make_stepper(problem) -> Stepper:
         # at step start / end / scratch x2; J, M, Minv: Jacobian, scratch, inverse of
         # I / (h gamma) - J; state: W_* slots
         return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((4, n_g)),
-                np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(6))
+                np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(7))
 
     @njit(error_model="numpy", refcount=False)
     def factor(J, M, Minv, hh):
@@ -321,6 +326,8 @@ def make_stepper(problem) -> Stepper:
         floor = atol / rtol if rtol > 0.0 else 1.0
         if fresh != FRESH_NONE:
             ctr[CTR_EVALS] += restart(t0, t1, y, p, sq, fresh, work, rtol, atol)
+            if sampling and fresh == FRESH_START:
+                state[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
         h = state[W_H]
         t = t0
         while t < t1:
@@ -358,6 +365,10 @@ def make_stepper(problem) -> Stepper:
                 dense_eval(y, hh, Q, 0.5, ym)
             t_new = t1 if last else t + hh
             observe(t, y, t_new, yn, ym, p, sq, obs)
+            if sampling and state[W_K] * cfg[CFG_SAMPLE_DT] <= t_new:
+                coeffs(y, yn, U, Q)
+                state[W_K] = emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec,
+                                  state[W_K], Y[3])
             for i in range(n):
                 y[i] = yn[i]
             for i in range(n_ev):
