@@ -22,6 +22,8 @@ from .integrators import METHODS
 from .integrators.driver import make_solve
 from .integrators.problem import (
     CFG_ATOL,
+    CFG_ATOL_I,
+    CFG_ATOL_NATURAL,
     CFG_H_FREE,
     CFG_MAX_STEPS,
     CFG_RECORD_EVERY,
@@ -31,6 +33,7 @@ from .integrators.problem import (
     CFG_SIZE,
     CFG_STEPS_PER_PERIOD,
     CTR_SIZE,
+    N_ATOL,
     Problem,
     record_sample,
 )
@@ -56,6 +59,8 @@ def settings_to_cfg(settings: Settings, record_every: int = 1, sample_dt: float 
     cfg = np.zeros(CFG_SIZE)
     cfg[CFG_SAMPLE_DT], cfg[CFG_SAMPLE_T0] = sample_dt, sample_t0
     cfg[CFG_RTOL], cfg[CFG_ATOL] = settings.rtol, settings.atol
+    cfg[CFG_ATOL_NATURAL] = settings.atol_units == "natural"
+    cfg[CFG_ATOL_I:CFG_ATOL_I + N_ATOL] = settings.atol      # absolute; natural: per point
     cfg[CFG_MAX_STEPS] = settings.max_steps
     cfg[CFG_STEPS_PER_PERIOD] = settings.steps_per_period
     cfg[CFG_H_FREE] = settings.h
@@ -94,11 +99,16 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                       sample=_record_instant)
     stepper = method_module(scene).make_stepper(problem)
     solve = make_solve(stepper, observer, scene.dither)
-    init, obs_init, finish = system.init, observer.init, observer.finish
+    init, obs_init, finish, scales = system.init, observer.init, observer.finish, system.scales
+    n_err = system.n_err
 
     @njit(error_model="numpy")
     def run_point(p, cfg, work, y, obs, out, ctr, rec):
         init(p, y)
+        if cfg[CFG_ATOL_NATURAL] != 0.0:
+            scales(p, cfg[CFG_ATOL_I:CFG_ATOL_I + n_err])
+            for i in range(n_err):
+                cfg[CFG_ATOL_I + i] *= cfg[CFG_ATOL]
         obs_init(obs)
         ctr[:] = 0
         status = solve(work, y, p, cfg, obs, ctr, rec)

@@ -113,6 +113,7 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
         base = Settings()
         settings = Settings(
             rtol=acc.rtol or base.rtol, atol=acc.atol or (acc.rtol or base.rtol) * 1e-3,
+            atol_units=acc.atol_units,
             steps_per_period=acc.steps_per_period or base.steps_per_period,
             h=acc.step or base.h)
         return Numerics(acc.integrator, settings, "explicit")

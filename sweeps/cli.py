@@ -167,7 +167,7 @@ def cmd_plan(args) -> int:
         stops = ("; steps land on every square-wave switch"
                  if plan.scene.dither == "square-velocity" else "")
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
-              f"atol={s.atol:g}{stops}")
+              f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
     print(f"outputs    {', '.join(plan.outputs)}")
     print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
           f"phase; cluster start and first compilation come on top)")

@@ -131,6 +131,8 @@ class ExplicitAccuracy(_Strict):
     integrator: str = "dopri5"
     rtol: PositiveFloat | None = None
     atol: PositiveFloat | None = None
+    # "natural": atol per state component times its natural scale (engine.settings.Settings)
+    atol_units: Literal["absolute", "natural"] = "absolute"
     steps_per_period: PositiveInt | None = None
     step: PositiveFloat | None = None
 

@@ -9,7 +9,9 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
 ``ORDER: int``
     order of the propagated solution (the convergence tests check the log2-slope).
 ``ADAPTIVE: bool``
-    True: the method reads ``cfg[CFG_RTOL]``, ``cfg[CFG_ATOL]``; False: it takes fixed
+    True: the method reads ``cfg[CFG_RTOL]`` and the per-component absolute tolerances
+    ``cfg[CFG_ATOL_I + i]``, ``i < n_err`` (``Settings.atol``, times the system's natural
+    scales with ``atol_units="natural"``; filled per point); False: it takes fixed
     steps of nominal size ``cfg[CFG_H]`` (the driver computes it from
     ``Settings.steps_per_period`` so that it divides the dither (half-)period).
 ``TABLEAU``

@@ -3,7 +3,7 @@
 Dormand & Prince (1980), "A family of embedded Runge-Kutta formulae"; continuous extension
 of order 4 by Shampine (1986) as in Hairer-Norsett-Wanner I, II.6 and scipy's ``RK45``.
 
-- Error: ``err = rms_i(h sum_j e_j k_ji / (atol + rtol max(|y_i|, |y1_i|)))`` over the
+- Error: ``err = rms_i(h sum_j e_j k_ji / (atol_i + rtol max(|y_i|, |y1_i|)))`` over the
   ``problem.n_err`` leading components; accept when ``err <= 1``.
 - Step control (I-controller): ``h_new = h * min(10, max(0.2, 0.9 err**(-1/5)))``, no growth
   right after a rejection; a non-finite ``err`` is a rejection with factor 0.2.
@@ -30,7 +30,7 @@ from .. import status as S
 from .events import make_locator
 from .stepsize import make_initial_step
 from .problem import (
-    CFG_ATOL,
+    CFG_ATOL_I,
     CFG_MAX_STEPS,
     CFG_RTOL,
     CFG_SAMPLE_DT,
@@ -120,7 +120,7 @@ def _make_attempt(tab, n, n_err, rhs):
         for i in range(n_err):
             ei = hh * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i]
                        + e7 * k7[i])
-            sc = atol + rtol * max(abs(y[i]), abs(yn[i]))
+            sc = atol[i] + rtol * max(abs(y[i]), abs(yn[i]))
             err += (ei / sc) ** 2
         return math.sqrt(err / n_err)
 
@@ -195,7 +195,7 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         K, Y, Q, G, state = work
-        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]
+        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL_I:CFG_ATOL_I + n_err]   # atol per component
         if fresh != FRESH_NONE:
             rhs(t0, y, p, sq, K[0])
             ctr[CTR_EVALS] += 1

@@ -21,7 +21,10 @@ CFG_H_FREE = 5      # Settings.h, the fixed step without dither (read by the dri
 CFG_RECORD_EVERY = 6       # API recording: keep every m-th accepted step
 CFG_SAMPLE_DT = 7   # spacing of the sampling instants k * dt (problem.sampling; <= 0: none)
 CFG_SAMPLE_T0 = 8   # no sampling instant before this time
-CFG_SIZE = 9
+CFG_ATOL_NATURAL = 9  # 1.0: Settings.atol in natural units (engine.settings), 0.0: absolute
+CFG_ATOL_I = 10     # per-component absolute tolerances of the n_err controlled components,
+N_ATOL = 4          # filled per point (kernels.run_point): cfg[CFG_ATOL_I + i], i < N_ATOL
+CFG_SIZE = CFG_ATOL_I + N_ATOL
 
 # ctr: int64 counters of one point
 CTR_STEPS = 0       # accepted steps

@@ -12,11 +12,11 @@ instead of ringing, so the step follows accuracy, not stability (explicit DP5 ne
 
 - Jacobian: one-sided differences of ``problem.rhs`` over the ``n_err`` state columns
   (quadrature states never feed back: zero columns), increment
-  ``sqrt(eps) (|y_j| + atol / rtol)``, directed away from kinks (event sign changes).
+  ``sqrt(eps) (|y_j| + atol_j / rtol)``, directed away from kinks (event sign changes).
   ``df/dt`` by central differences, only when ``f`` depends on ``t`` (probed once per
   point at two states; a square wave is constant on a segment). Per step: ``n_err + 1``
   evaluations (+2 for ``df/dt``) and 5 for the stages.
-- Error: ``U_6 = y1 - y1_hat``, ``err = rms_i(U_6i / (atol + rtol max(|y_i|, |y1_i|)))`` over
+- Error: ``U_6 = y1 - y1_hat``, ``err = rms_i(U_6i / (atol_i + rtol max(|y_i|, |y1_i|)))`` over
   the ``n_err`` leading components; accept when ``err <= 1``.
 - Step control: Gustafsson's predictive controller as in ``rodas.f``
   (:mod:`engine.integrators.rosenbrock_ops`).
@@ -41,7 +41,7 @@ from ..jit import njit
 from .events import make_locator
 from .stepsize import make_initial_step
 from .problem import (
-    CFG_ATOL,
+    CFG_ATOL_I,
     CFG_MAX_STEPS,
     CFG_RTOL,
     CFG_SAMPLE_DT,
@@ -191,7 +191,7 @@ def _make_attempt(tab, n, n_err, rhs):
         for k in range(n):
             yn[k] = yt[k] + U6[k]
             if k < n_err:
-                sc = atol + rtol * max(abs(y[k]), abs(yn[k]))
+                sc = atol[k] + rtol * max(abs(y[k]), abs(yn[k]))
                 err += (U6[k] / sc) ** 2
         return math.sqrt(err / n_err)
 
@@ -322,8 +322,7 @@ def make_stepper(problem) -> Stepper:
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         U, Y, Q, G, J, state = work[0], work[1], work[2], work[3], work[4], work[7]
         yn, ym, f0, ft = Y[1], Y[2], Y[4], Y[5]
-        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL]
-        floor = atol / rtol if rtol > 0.0 else 1.0
+        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL_I:CFG_ATOL_I + n_err]   # atol per component
         if fresh != FRESH_NONE:
             ctr[CTR_EVALS] += restart(t0, t1, y, p, sq, fresh, work, rtol, atol)
             if sampling and fresh == FRESH_START:
@@ -333,7 +332,7 @@ def make_stepper(problem) -> Stepper:
         while t < t1:
             # Jacobian (and df/dt) at (t, y), kept through rejections of this step
             rhs(t, y, p, sq, f0)
-            jac(t, y, f0, p, sq, J, Y[0], ft, floor, G[2], G[3])
+            jac(t, y, f0, p, sq, J, Y[0], ft, atol, rtol, G[2], G[3])
             ctr[CTR_EVALS] += 1 + n_err
             if state[W_TDEP] != 0.0:
                 dfdt(t, y, f0, p, sq, min(h, t1 - t), ft, Y[0], G[2], G[3])

@@ -69,10 +69,11 @@ def _crossed(g0, g1, m):
 
 
 def make_fd_jacobian(n, n_err, rhs, n_events, events):
-    """njit ``jac(t, y, f0, p, sq, J, yt, ft, floor, g0, g1)``: one-sided differences ``J = df/dy``.
+    """njit ``jac(t, y, f0, p, sq, J, yt, ft, atol, rtol, g0, g1)``: one-sided differences
+    ``J = df/dy``.
 
-    Columns ``j < n_err`` with increment ``sqrt(eps) (|y_j| + floor)`` (``floor`` a magnitude
-    below which ``y_j`` is negligible, e.g. ``atol / rtol``); the other columns (quadrature
+    Columns ``j < n_err`` with increment ``sqrt(eps) (|y_j| + atol_j / rtol)`` (the
+    magnitude below which ``y_j`` is negligible; 1 when rtol is 0); the other columns (quadrature
     states, which nothing depends on) are zero. ``f0 = f(t, y)``; ``n_err`` evaluations.
     The increment goes *away* from a kink or discontinuity of ``f`` (a sign change of an
     event function, ``g0``/``g1`` scratch): a difference across the Karnopp band edge is
@@ -80,14 +81,14 @@ def make_fd_jacobian(n, n_err, rhs, n_events, events):
     a small error estimate, since both embedded solutions share the Jacobian.
     """
     @njit(error_model="numpy", refcount=False)
-    def jac(t, y, f0, p, sq, J, yt, ft, floor, g0, g1):
+    def jac(t, y, f0, p, sq, J, yt, ft, atol, rtol, g0, g1):
         for k in range(n):
             yt[k] = y[k]
         if n_events:
             events(t, y, p, sq, g0)
         for j in range(n_err):
             yj = y[j]
-            step = SQRT_EPS * (abs(yj) + floor)
+            step = SQRT_EPS * (abs(yj) + (atol[j] / rtol if rtol > 0.0 else 1.0))
             yt[j] = yj + step
             if n_events:
                 events(t, yt, p, sq, g1)

@@ -16,13 +16,14 @@ from ..jit import njit
 def make_initial_step(n, n_err, rhs, error_order):
     """njit ``h0(t, y, f0, p, sq, y1, f1, rtol, atol, t_span) -> h``.
 
-    ``n_err`` leading components are under error control; ``y1``, ``f1`` are scratch rows.
+    ``n_err`` leading components are under error control (``atol[i]`` per component);
+    ``y1``, ``f1`` are scratch rows.
     """
     @njit(error_model="numpy", refcount=False)
     def initial_step(t, y, f0, p, sq, y1, f1, rtol, atol, t_span):
         d0 = d1 = 0.0
         for i in range(n_err):
-            sc = atol + rtol * abs(y[i])
+            sc = atol[i] + rtol * abs(y[i])
             d0 += (y[i] / sc) ** 2
             d1 += (f0[i] / sc) ** 2
         d0, d1 = math.sqrt(d0 / n_err), math.sqrt(d1 / n_err)
@@ -33,7 +34,7 @@ def make_initial_step(n, n_err, rhs, error_order):
         rhs(t + h0, y1, p, sq, f1)
         d2 = 0.0
         for i in range(n_err):
-            d2 += ((f1[i] - f0[i]) / (atol + rtol * abs(y[i]))) ** 2
+            d2 += ((f1[i] - f0[i]) / (atol[i] + rtol * abs(y[i]))) ** 2
         d2 = math.sqrt(d2 / n_err) / h0
         if max(d1, d2) <= 1e-15:
             h1 = max(1e-6, h0 * 1e-3)

@@ -25,6 +25,7 @@ class System(NamedTuple):
     velocity: Callable    # velocity(t, y, p, sq): body velocity
     init: Callable        # init(p, y): initial state
     qf: int               # index of the running integral of F, -1 if absent
+    scales: Callable      # scales(p, out): natural scale of each error-controlled component
 
 
 def make_system(scene) -> System:
@@ -36,6 +37,7 @@ def make_system(scene) -> System:
         n=n, n_err=mod.N_BASE, rhs=mod.make_rhs(scene), n_events=n_events, events=events,
         interface=mod.make_interface(scene), position=mod.make_position(scene),
         velocity=mod.make_velocity(scene), init=init, qf=mod.quadrature_index(scene),
+        scales=mod.make_scales(scene),
     )
 
 

@@ -25,6 +25,16 @@ Z = 0
 N_BASE = 1
 
 
+def make_scales(scene):
+    """njit ``scales(p, out)``: the natural scale of ``z``, ``fc / sigma0`` (metres: the
+    bristle deflection at the Coulomb level); used by ``Settings(atol_units="natural")``."""
+    @njit(error_model="numpy")
+    def scales(p, out):
+        fc = abs(p[P.FC])
+        out[Z] = fc / p[P.SIGMA0] if fc > 0.0 and p[P.SIGMA0] > 0.0 else 1.0
+    return scales
+
+
 def quadrature_index(scene) -> int:
     """Index of the running integral of F, or -1 when ``F_mean`` is not requested."""
     return N_BASE if "F_mean" in scene.outputs else -1

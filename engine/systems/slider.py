@@ -121,6 +121,20 @@ def make_velocity(scene):
     return velocity
 
 
+def make_scales(scene):
+    """njit ``scales(p, out)``: natural scales of ``(e, v, z)`` -- ``fc`` (the spring force
+    at break-away), ``max(|v_ref|, W)`` (1 when both are 0), ``fc / sigma0`` (the bristle
+    deflection at the Coulomb level); used by ``Settings(atol_units="natural")``."""
+    @njit(error_model="numpy")
+    def scales(p, out):
+        fc = abs(p[P.FC])
+        vs = max(abs(p[P.V_REF]), abs(p[P.W]))
+        out[E] = fc if fc > 0.0 else 1.0
+        out[V] = vs if vs > 0.0 else 1.0
+        out[Z] = out[E] / p[P.SIGMA0] if p[P.SIGMA0] > 0.0 else 1.0
+    return scales
+
+
 def make_init(scene):
     """njit ``init(p, y)``: ``(e0, v0, z0)`` from ``p``, quadrature states zeroed."""
     n = N_BASE + (quadrature_index(scene) >= 0)

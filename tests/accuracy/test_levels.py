@@ -66,3 +66,14 @@ def test_levels_are_ordered(level_errors):
 def test_level_within_documented_bound(level_errors, level):
     assert np.isfinite(level_errors[level])
     assert level_errors[level] <= TARGET_ERROR[level]
+
+
+def test_explicit_numerics_carry_atol_units():
+    """An explicit ``accuracy`` table reaches the engine's Settings unchanged, natural
+    atol units included (engine.settings.Settings.atol_units)."""
+    spec = parse_spec({**SPEC, "accuracy": {"integrator": "dopri5", "rtol": 1e-7,
+                                            "atol": 1e-9, "atol_units": "natural"}})
+    s = make_plan(spec).numerics.settings
+    assert (s.rtol, s.atol, s.atol_units) == (1e-7, 1e-9, "natural")
+    with pytest.raises(ValueError, match="atol_units"):
+        parse_spec({**SPEC, "accuracy": {"integrator": "dopri5", "atol_units": "relative"}})

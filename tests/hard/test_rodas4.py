@@ -19,6 +19,7 @@ from engine.integrators.rosenbrock import RosenbrockTableau
 from engine.integrators.rosenbrock_ops import invert, make_fd_jacobian, make_time_derivative
 
 TAB = rodas4.TABLEAU
+FLOOR_ONE = np.ones(3)   # atol_j = 1 with rtol = 1 (jac increments sqrt(eps) (|y_j| + 1))
 
 
 def _kwargs(tab):
@@ -93,7 +94,7 @@ def test_fd_jacobian_matches_the_analytic_one():
     y, p = np.array([0.3, 2.0, 5.0]), np.array([1e6])
     f0, J, yt, ft, G = np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3), np.empty(1)
     _stiff_rhs(0.7, y, p, 1.0, f0)
-    jac(0.7, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
+    jac(0.7, y, f0, p, 1.0, J, yt, ft, FLOOR_ONE, 1.0, G, G)
     exact = np.array([[-1e6, 0, 0], [2.0, 0.3, 0], [1.0, 0, 0]])
     np.testing.assert_allclose(J, exact, rtol=1e-6, atol=1e-6)
 
@@ -134,10 +135,10 @@ def _fixed_step_error(n_steps, k=1e4, t_end=2.0):
     for i in range(n_steps):
         t = i * h
         _stiff_rhs(t, y, p, 1.0, f0)
-        jac(t, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
+        jac(t, y, f0, p, 1.0, J, yt, ft, FLOOR_ONE, 1.0, G, G)
         dfdt(t, y, f0, p, 1.0, h, ft, yt, G, G)
         invert(np.eye(3) / (h * TAB.gamma) - J, Minv)
-        attempt(t, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, 1.0)
+        attempt(t, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, FLOOR_ONE)
         y[:] = yn
     # from y0(0) = 1 = cos 0 the solution stays on cos t exactly (c = 0)
     exact1 = math.exp(math.sin(t_end))
@@ -162,10 +163,10 @@ def _dense_mid_error(h, k=1.0):
                          np.empty(3))
     G = np.empty(1)
     _stiff_rhs(0.0, y, p, 1.0, f0)
-    jac(0.0, y, f0, p, 1.0, J, yt, ft, 1.0, G, G)
+    jac(0.0, y, f0, p, 1.0, J, yt, ft, FLOOR_ONE, 1.0, G, G)
     dfdt(0.0, y, f0, p, 1.0, h, ft, yt, G, G)
     invert(np.eye(3) / (h * TAB.gamma) - J, Minv)
-    attempt(0.0, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, 1.0)
+    attempt(0.0, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, FLOOR_ONE)
     coeffs(y, yn, U, Q)
     dense_eval(y, h, Q, 0.5, ym)
     t = 0.5 * h
