@@ -16,6 +16,11 @@ own (recursively derived) UUID. A cell without a stable representation (a plain 
 object) keeps numba's random UUID: the kernel is then compiled per process -- a cache miss,
 never a wrong kernel.
 
+Machine code is named by qualified name plus a per-process counter, so distinct closures
+of one factory compiled in different processes could share a symbol and be cross-linked
+when a third process loads both from the cache; every closure's qualified name therefore
+carries its UUID (:func:`_name_by_uuid`).
+
 numba checks only the source file of a cached function for changes, not the files of the
 functions it calls, so an edit elsewhere in the engine could replay stale machine code.
 The cache therefore lives in a folder named by a hash of every engine source file:
@@ -26,6 +31,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import secrets
 from pathlib import Path
 
 import numba
@@ -93,6 +99,23 @@ def closure_uuid(func) -> str | None:
     return "ditherlab-" + hashlib.sha256("|".join(parts).encode()).hexdigest()[:32]
 
 
+def _name_by_uuid(func, uuid: str | None) -> None:
+    """Append the closure's UUID (or, without one, a random tag) to its qualified name.
+
+    numba names a function's machine code by qualified name plus a per-process counter.
+    Two closures of one factory compiled in two processes get the same counter, hence the
+    same symbol; a third process loading both from the disk cache then linked the first
+    one's code for both (measured: a block kernel returned another scene's output columns;
+    tests/engine/test_disk_cache.py). Distinct closures must have distinct names; identical
+    ones (same UUID) may share theirs. The code object is renamed too, so a dispatcher
+    rebuilt from a pickle keeps the name.
+    """
+    tag = uuid[len("ditherlab-"):][:16] if uuid else secrets.token_hex(8)
+    name = f"{func.__qualname__}__{tag}"
+    func.__qualname__ = name
+    func.__code__ = func.__code__.replace(co_qualname=name)
+
+
 def njit(fn=None, *, refcount: bool = True, **options):
     """``numba.njit(cache=True, **options)`` with a deterministic dispatcher UUID.
 
@@ -108,8 +131,10 @@ def njit(fn=None, *, refcount: bool = True, **options):
         options["_nrt"] = False
 
     def decorate(func):
-        dispatcher = numba.njit(**options)(func)
         uuid = closure_uuid(func)
+        if func.__closure__:
+            _name_by_uuid(func, uuid)
+        dispatcher = numba.njit(**options)(func)
         if uuid is not None:
             try:
                 dispatcher._set_uuid(uuid)

@@ -52,3 +52,40 @@ def test_distinct_closures_get_distinct_uuids():
     ua, ub = block_kernel(a)._ditherlab_uuid, block_kernel(b)._ditherlab_uuid
     assert ua.startswith("ditherlab-") and ub.startswith("ditherlab-") and ua != ub
     assert block_kernel(a.with_())._ditherlab_uuid == ua   # deterministic
+
+
+PAIR = """
+import json, sys, numpy as np
+from engine import params as P
+from engine.batch import run_block
+from engine.scene import Scene
+from engine.settings import Settings
+base = Scene(friction="lugre", dither="none", method="rk4", outputs=("v_mean", "F_mean"))
+res = {}
+for order in sys.argv[1:]:
+    scene = base.with_(outputs=tuple(order.split(",")))
+    out = run_block(scene, np.array([[0.0, 1.0, 0.4, 0.1]]), P.pack(t_end=2.0), Settings())
+    res[order] = {k: float(v[0]) for k, v in out.outputs.items()}
+print(json.dumps(res))
+"""
+
+
+def run_pair(cache_dir, *orders) -> dict:
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(cache_dir)}
+    out = subprocess.run([sys.executable, "-c", PAIR, *orders], env=env, capture_output=True,
+                         text=True, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_kernels_cached_by_different_processes_do_not_collide(tmp_path):
+    """Two closures of one factory compiled in two processes get the same per-process
+    function counter; numba names machine code by qualified name + counter, so without
+    unique names a third process loading both from the disk cache linked the first one's
+    code for both (found: a block kernel returned another scene's output columns). Each
+    closure's name now carries its UUID (engine/jit.py)."""
+    a, b = "v_mean,F_mean", "F_mean,v_mean"
+    fresh = {**run_pair(tmp_path / "a", a), **run_pair(tmp_path / "b", b)}
+    run_pair(tmp_path / "shared", a)             # process 1 caches a
+    run_pair(tmp_path / "shared", b)             # process 2 caches b
+    loaded = run_pair(tmp_path / "shared", a, b)  # process 3 loads both
+    assert loaded == fresh
