@@ -17,6 +17,7 @@ the constant ``square_sign(k)``.
 from __future__ import annotations
 
 import numpy as np
+
 from .jit import njit
 
 KINDS = ("none", "square-velocity", "sine-velocity", "sine-force")

@@ -14,7 +14,6 @@ from functools import cache
 from typing import NamedTuple
 
 import numpy as np
-from .jit import njit
 
 from . import params as P
 from . import status as S
@@ -37,6 +36,7 @@ from .integrators.problem import (
     Problem,
     record_sample,
 )
+from .jit import njit
 from .observables import make_observer
 from .settings import Settings
 from .systems import make_system

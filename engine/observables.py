@@ -34,11 +34,11 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
-from .jit import njit
 
 from . import params as P
 from .dither import CODE, NONE
 from .friction.elastoplastic import PRESLIDE, SLIDE, STICK
+from .jit import njit
 from .outputs import SIMULATE
 
 O_ON, O_T0, O_X0, O_Q0 = 0, 1, 2, 3

@@ -42,7 +42,7 @@ class Scene:
 
     @classmethod
     def from_params(cls, p, *, system="slider", friction="lugre", dither="square-velocity",
-                    method="dopri5", outputs=(), grid_vd=None) -> "Scene":
+                    method="dopri5", outputs=(), grid_vd=None) -> Scene:
         """Scene whose effect flags are off exactly where ``p`` makes them vanish.
 
         ``grid_vd`` -- the swept vd values, if any (bristle damping matters when
@@ -57,5 +57,5 @@ class Scene:
             outputs=tuple(outputs),
         )
 
-    def with_(self, **changes) -> "Scene":
+    def with_(self, **changes) -> Scene:
         return replace(self, **changes)

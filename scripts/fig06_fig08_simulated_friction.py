@@ -26,17 +26,17 @@ import time
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from numba import njit  # noqa: E402
-from scipy.signal import butter, sosfiltfilt  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from numba import njit
+from scipy.signal import butter, sosfiltfilt
 
-from engine import params as P  # noqa: E402
-from engine.analysis import effective_friction, sine_force_simplified  # noqa: E402
-from engine.api import simulate  # noqa: E402
-from engine.scene import Scene  # noqa: E402
-from engine.settings import Settings  # noqa: E402
-from engine.systems import slider  # noqa: E402
+from engine import params as P
+from engine.analysis import effective_friction, sine_force_simplified
+from engine.api import simulate
+from engine.scene import Scene
+from engine.settings import Settings
+from engine.systems import slider
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")
 CASES = {"fig06 square W=0.5, omega=1000": ("square-velocity", 0.5, 1000.0, 32),

@@ -11,13 +11,23 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import tomllib
 from pathlib import Path
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal
 
-from pydantic import (BaseModel, ConfigDict, Discriminator, Field, NonNegativeFloat,
-                      PositiveFloat, PositiveInt, Tag, ValidationError, field_validator,
-                      model_validator)
+import tomllib
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    NonNegativeFloat,
+    PositiveFloat,
+    PositiveInt,
+    Tag,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from .version import __version__
 
@@ -66,8 +76,7 @@ def _dict_or_other(tag_for_dict: str, tag_for_other: str):
                          else tag_for_other)
 
 
-Axis = Annotated[Union[Annotated[list[float], Field(min_length=1), Tag("list")],
-                       Annotated[Range, Tag("range")]],
+Axis = Annotated[Annotated[list[float], Field(min_length=1), Tag("list")] | Annotated[Range, Tag("range")],
                  _dict_or_other("range", "list")]
 
 
@@ -145,8 +154,7 @@ class Spec(_Strict):
     dither: Literal["none", "square-velocity", "sine-velocity", "sine-force"] = "square-velocity"
     method: Literal["simulate", "averaged", "hbm"] = "simulate"
     outputs: list[str] | None = None
-    accuracy: Annotated[Union[Annotated[Literal["draft", "standard", "reference"], Tag("level")],
-                              Annotated[ExplicitAccuracy, Tag("explicit")]],
+    accuracy: Annotated[Annotated[Literal["draft", "standard", "reference"], Tag("level")] | Annotated[ExplicitAccuracy, Tag("explicit")],
                         _dict_or_other("explicit", "level")] = "standard"
     params: Params = Params()
     time: TimeWindow = TimeWindow()

@@ -22,9 +22,9 @@ Eq. 5.20 with DESIGN.md's corrections, is :func:`sine_force_simplified`.
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
+from ..jit import njit
 from .quadrature import (
     DA,
     DB,

@@ -30,11 +30,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
 from .. import status as ST
 from ..friction.stribeck import g, sigma1
+from ..jit import njit
 
 
 @njit(cache=True)

@@ -21,9 +21,8 @@ only when a quadrature node sits exactly on ``u = 0`` -- the square wave at
 """
 from __future__ import annotations
 
-from ..jit import njit
-
 from ..friction.stribeck import g, sigma1
+from ..jit import njit
 
 
 @njit(cache=True, error_model="numpy")

@@ -23,8 +23,8 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from ..jit import njit
 
+from ..jit import njit
 from .integrands import abc
 
 SQUARE = 0

@@ -30,9 +30,9 @@ The averaged model is the ``omega -> infinity`` limit: omega does not enter.
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
+from ..jit import njit
 from .effective import LUGRE, force_and_slope, law_vector
 from .quadrature import DA, DB, DC, N_AVG, N_QUAD, A, B, C, gauss_legendre, phase_average, rule_code
 

@@ -13,6 +13,7 @@ Eq. 2.7 is printed with z; DESIGN.md §1 fixes it to |z| so that the law is odd.
 from __future__ import annotations
 
 import numpy as np
+
 from ..jit import njit
 
 STICK = 0

@@ -10,8 +10,8 @@ For frozen ``u`` the z equation is linear, ``dz = u - k z`` with rate
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
+from ..jit import njit
 from .stribeck import g
 
 

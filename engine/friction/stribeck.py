@@ -9,6 +9,7 @@ and the static (kinetic) friction model of Eq. 2.2 while sliding,
 from __future__ import annotations
 
 import numpy as np
+
 from ..jit import njit
 
 

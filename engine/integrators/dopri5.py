@@ -24,11 +24,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from ..jit import njit
 
 from .. import status as S
+from ..jit import njit
 from .events import make_locator
-from .stepsize import make_initial_step
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -44,6 +43,7 @@ from .problem import (
     no_sample,
     record_step,
 )
+from .stepsize import make_initial_step
 from .tableau import ButcherTableau
 
 NAME = "dopri5"

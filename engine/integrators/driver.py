@@ -19,11 +19,11 @@ dither or without a finite positive omega (methods split each segment into
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
 from .. import status as S
 from ..dither import CODE, NONE, SQUARE_VELOCITY, square_sign, switch_time
+from ..jit import njit
 from .problem import CFG_H, CFG_H_FREE, CFG_STEPS_PER_PERIOD, FRESH_NONE, FRESH_START, FRESH_SWITCH
 
 

@@ -13,9 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from ..jit import njit
 
 from .. import status as S
+from ..jit import njit
 from .problem import (
     CFG_H,
     CFG_MAX_STEPS,

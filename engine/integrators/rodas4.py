@@ -39,7 +39,6 @@ import numpy as np
 from .. import status as S
 from ..jit import njit
 from .events import make_locator
-from .stepsize import make_initial_step
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -64,6 +63,7 @@ from .rosenbrock_ops import (
     make_time_probe,
     step_divisor,
 )
+from .stepsize import make_initial_step
 
 NAME = "rodas4"
 ORDER = 4

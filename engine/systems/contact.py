@@ -15,10 +15,10 @@ holding force 0 (nothing drives the contact).
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
+from ..jit import njit
 from .laws import make_kinks, make_law
 
 Z = 0

@@ -21,11 +21,10 @@ drops ``sigma2 u``.
 """
 from __future__ import annotations
 
-from ..jit import njit
-
 from .. import params as P
 from ..friction.elastoplastic import alpha as ep_alpha
 from ..friction.stribeck import _decay
+from ..jit import njit
 
 
 def make_g(stribeck: bool):

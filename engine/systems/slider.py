@@ -22,10 +22,10 @@ from two values of ``e``).
 from __future__ import annotations
 
 import numpy as np
-from ..jit import njit
 
 from .. import params as P
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
+from ..jit import njit
 from .laws import make_kinks, make_law
 
 E, V, Z = 0, 1, 2

@@ -18,9 +18,9 @@ from engine import params as P
 from engine.api import simulate
 from engine.integrators.problem import CFG_ATOL_I
 from engine.kernels import settings_to_cfg
+from engine.scene import Scene
 from engine.settings import Settings
 from engine.systems import make_system
-from engine.scene import Scene
 
 from .hardcases import REFS, error_units, run
 

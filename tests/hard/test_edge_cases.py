@@ -10,8 +10,8 @@ import pytest
 from engine import Scene, Settings, pack, simulate
 from engine import params as P
 from engine.friction import stribeck
-from engine.systems.slider import V, Z
 from engine.params import PAPER_DEFAULTS
+from engine.systems.slider import V, Z
 
 TOL = dict(rtol=1e-8, atol=1e-11)
 FINE = dict(rtol=1e-10, atol=1e-13)

@@ -1,5 +1,4 @@
 import pytest
-
 from storetest_cubes import make_cube
 
 

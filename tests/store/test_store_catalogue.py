@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from storetest_cubes import make_cube
 
 import store
-from storetest_cubes import make_cube
 
 ROOT = Path(__file__).resolve().parents[2]
 

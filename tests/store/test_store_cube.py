@@ -5,11 +5,10 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
+from storetest_cubes import ATTRS, COORDS, OUTPUTS, block_arrays, make_cube
 
 import store
 from store import attrs as A
-
-from storetest_cubes import ATTRS, COORDS, OUTPUTS, block_arrays, make_cube
 
 
 def test_layout_follows_design_section_4(cube, tmp_path):

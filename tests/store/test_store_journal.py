@@ -7,10 +7,10 @@ import sys
 import numpy as np
 import pytest
 import xarray as xr
+from storetest_cubes import block_arrays
 
 import store
 from store.journal import FIELDS
-from storetest_cubes import block_arrays
 
 BLOCKS = {0: np.arange(0, 8), 1: np.arange(8, 16), 3: np.array([23, 16, 20])}
 

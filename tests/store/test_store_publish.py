@@ -11,11 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
+from storetest_cubes import block_arrays, make_cube
+from storetest_writer import noise
 
 import store
 from store.layout import temp_name
-from storetest_cubes import block_arrays, make_cube
-from storetest_writer import noise
 
 HERE = Path(__file__).parent
 N_BIG = 600  # 600 x 600 points, two outputs: ~3 MB of zlib-resistant data, ~0.25 s a publish

@@ -8,10 +8,10 @@ from it by a stable point. The store also treats a missing point as a separation
 import numpy as np
 import pandas as pd
 import pytest
+from storetest_cubes import STABLE_GRID, V_REF, W, averaged_cube
 
 import store
 from store import NO_DATA, PU, STABLE, SU
-from storetest_cubes import STABLE_GRID, V_REF, W, averaged_cube
 
 EXPECTED = np.array(
     [  # by the rule above, column by column

@@ -91,7 +91,7 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             start_new_session=True)
     n_blocks = 32
-    done = lambda: len(list(journal.glob("*.npz"))) if journal.exists() else 0  # noqa: E731
+    done = lambda: len(list(journal.glob("*.npz"))) if journal.exists() else 0
     _wait_for(lambda: done() >= 3 or proc.poll() is not None, 300, "three journaled blocks",
               poll=0.02)
     os.killpg(proc.pid, signal.SIGKILL)  # the submitter and its local cluster, mid-flight
