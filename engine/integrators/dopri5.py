@@ -82,7 +82,10 @@ W_H, W_REJ, W_K = 0, 1, 2   # work state: step size, reject flag, next sampling 
 
 
 def _make_attempt(tab, n, n_err, rhs):
-    """njit ``attempt(t, hh, y, p, sq, K, Y, rtol, atol) -> err``: stages 2..7 (k1 given)."""
+    """njit ``attempt(t, hh, y, p, sq, K, Y, rtol, atol) -> err``: stages 2..7 (k1 given).
+
+    Compiled with floating-point contraction (fused multiply-add in the stage sums), as
+    gcc does by default for the C reference (``-ffp-contract=fast``): ~1.5 % per step."""
     a, c, e = tab.a, tab.c, tab.b_err
     a21 = a[1, 0]
     a31, a32 = a[2, 0], a[2, 1]
@@ -93,7 +96,7 @@ def _make_attempt(tab, n, n_err, rhs):
     c2, c3, c4, c5 = c[1], c[2], c[3], c[4]
     e1, e3, e4, e5, e6, e7 = e[0], e[2], e[3], e[4], e[5], e[6]
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(error_model="numpy", refcount=False, fastmath={"contract"})
     def attempt(t, hh, y, p, sq, K, Y, rtol, atol):
         k1, k2, k3, k4, k5, k6, k7 = K[0], K[1], K[2], K[3], K[4], K[5], K[6]
         yt, yn = Y[0], Y[1]
