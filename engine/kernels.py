@@ -95,7 +95,8 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
                       n_events=system.n_events, events=system.events,
                       observe=observer.observe, record=not sampled_record,
-                      needs_mid=observer.needs_mid, sampling=sampled_record,
+                      needs_mid=observer.needs_mid, graze=system.event_jumps,
+                      sampling=sampled_record,
                       sample=_record_instant)
     stepper = method_module(scene).make_stepper(problem)
     solve = make_solve(stepper, observer, scene.dither)

@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import status as S
 from ..jit import njit
-from .events import make_locator
+from .events import make_grazing_probe, make_locator
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -185,14 +185,15 @@ def make_stepper(problem) -> Stepper:
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     initial_step = make_initial_step(n, n_err, rhs, ORDER)
     locate = make_locator(events, n_ev, dense_eval)
+    graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(inline="always", error_model="numpy")
     def alloc():
         # K: stages k1..k7; Y: yt, yn, ymid, ytmp; Q: dense coefficients;
-        # G: event values at step start / end / scratch; state: the W_* slots
-        return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((3, n_g)),
+        # G: event values at step start / end / scratch / grazing probe x2; state: W_* slots
+        return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((5, n_g)),
                 np.zeros(3))
 
     @njit(error_model="numpy", refcount=False)
@@ -234,6 +235,11 @@ def make_stepper(problem) -> Stepper:
                 if _sign_change(G[0], G[1], n_ev):
                     coeffs(K, Q)
                     th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[2])
+                elif graze:   # a dip through zero and back inside the step
+                    coeffs(K, Q)
+                    th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[3], G[4])
+                    if th_b < 1.0:
+                        th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], Y[3], G[2], th_b)
                 # a corner within round-off of t is crossed, not landed on: a landing
                 # shorter than LANDING_FLOOR (relative) that falls short would otherwise
                 # repeat forever with zero-length steps (u = v + W sin hovering at 1e-13)

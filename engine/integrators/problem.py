@@ -50,6 +50,7 @@ class Problem(NamedTuple):
     observe: Callable      # observe(t0, y0, t1, y1, ymid, p, sq, obs)
     record: bool = True    # call record_step (a run-time no-op for an empty rec)
     needs_mid: bool = True # observe reads ymid (else methods may pass any array)
+    graze: bool = False    # events mark jumps of rhs: probe steps for grazing crossings
     sampling: bool = False # call sample at the instants k * cfg[CFG_SAMPLE_DT] (dense output)
     sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
 

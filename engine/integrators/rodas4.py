@@ -38,7 +38,7 @@ import numpy as np
 
 from .. import status as S
 from ..jit import njit
-from .events import make_locator
+from .events import make_grazing_probe, make_locator
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -244,6 +244,7 @@ def make_stepper(problem) -> Stepper:
     dfdt = make_time_derivative(n, rhs, n_ev, events)
     depends_on_t = make_time_probe(n, n_err, rhs)
     locate = make_locator(events, n_ev, dense_eval)
+    graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     sampling = problem.sampling
     first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
     n_g = max(n_ev, 1)
@@ -251,9 +252,9 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def alloc():
         # U: stages; Y: yt, yn, ym, ytmp, f0, ft, r; Q: dense coefficients; G: event values
-        # at step start / end / scratch x2; J, M, Minv: Jacobian, scratch, inverse of
+        # at step start / end / scratch x2 / grazing probe; J, M, Minv: Jacobian, scratch, inverse of
         # I / (h gamma) - J; state: W_* slots
-        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((4, n_g)),
+        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((5, n_g)),
                 np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(7))
 
     @njit(error_model="numpy", refcount=False)
@@ -297,10 +298,17 @@ def make_stepper(problem) -> Stepper:
         U, Y, Q, G, state = work[0], work[1], work[2], work[3], work[7]
         yn, ytmp = Y[1], Y[3]
         events(t + hh, yn, p, sq, G[1])
-        if not _sign_change(G[0], G[1], n_ev):
+        if _sign_change(G[0], G[1], n_ev):
+            coeffs(y, yn, U, Q)
+            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
+        elif graze:   # a dip through zero and back inside the step (G[3]: jac scratch)
+            coeffs(y, yn, U, Q)
+            th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[3], G[4])
+            if not th_b < 1.0:
+                return hh, err, False
+            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b)
+        else:
             return hh, err, False
-        coeffs(y, yn, U, Q)
-        th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
         if not EVENT_MARGIN < th < 1.0 - EVENT_MARGIN:
             return hh, err, False
         ctr[CTR_REJECTED] += 1

@@ -26,6 +26,7 @@ class System(NamedTuple):
     init: Callable        # init(p, y): initial state
     qf: int               # index of the running integral of F, -1 if absent
     scales: Callable      # scales(p, out): natural scale of each error-controlled component
+    event_jumps: bool     # the events mark jumps of rhs (static laws' Karnopp band edges)
 
 
 def make_system(scene) -> System:
@@ -34,10 +35,10 @@ def make_system(scene) -> System:
     n, init = mod.make_init(scene)
     n_events, events = mod.make_events(scene)
     return System(
-        n=n, n_err=mod.N_BASE, rhs=mod.make_rhs(scene), n_events=n_events, events=events,
+        n=n, n_err=mod.error_size(scene), rhs=mod.make_rhs(scene), n_events=n_events, events=events,
         interface=mod.make_interface(scene), position=mod.make_position(scene),
         velocity=mod.make_velocity(scene), init=init, qf=mod.quadrature_index(scene),
-        scales=mod.make_scales(scene),
+        scales=mod.make_scales(scene), event_jumps=scene.friction in ("coulomb", "stribeck"),
     )
 
 

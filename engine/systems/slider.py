@@ -121,6 +121,11 @@ def make_velocity(scene):
     return velocity
 
 
+def error_size(scene) -> int:
+    """Leading components under error control: ``(e, v, z)``; the quadrature of F is not."""
+    return N_BASE
+
+
 def make_scales(scene):
     """njit ``scales(p, out)``: natural scales of ``(e, v, z)`` -- ``fc`` (the spring force
     at break-away), ``max(|v_ref|, W)`` (1 when both are 0), ``fc / sigma0`` (the bristle
