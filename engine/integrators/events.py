@@ -3,7 +3,10 @@
 A method hands over the dense-output polynomial of its step; the root ``theta`` in (0, 1)
 of the earliest event is found by the Illinois variant of regula falsi (Dowell & Jarratt
 1971), which keeps the bracket and converges superlinearly, using dense-output states only
-(no right-hand-side evaluations).
+(no right-hand-side evaluations). The root is taken on its far side (within 1e-13 in theta).
+
+Events that mark *jumps* of the right-hand side (the static laws' Karnopp band) also get a
+grazing probe (:func:`make_grazing_probe`): a dip through zero and back within one step.
 """
 from __future__ import annotations
 
@@ -47,8 +50,10 @@ def make_locator(events, n_events, dense_eval):
                 side = 1
             if b - a < THETA_TOL:
                 break
-        # the root lies in [a, b]; b is on the far side, a on the near side
-        return a if abs(fa) < abs(fb) else b
+        # the root lies in [a, b]; b is on the far side, a on the near side. Land on the
+        # far side: the next step then starts past the corner, and a crossing back within
+        # it (leaving the Karnopp band it just entered) is a sign change it sees
+        return b
 
     @njit(error_model="numpy", refcount=False)
     def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp, th_b=1.0):
@@ -64,6 +69,11 @@ def make_locator(events, n_events, dense_eval):
 
 
 
+
+GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
+GRAZE_ITER = 48     # golden-section steps: the bracket shrinks to 0.618**48 ~ 1e-10
+
+
 def make_grazing_probe(events, n_events, dense_eval):
     """njit ``probe(t, hh, y, Q, p, sq, g0, g1, ytmp, gb, ga) -> theta_b`` for steps whose
     ends show no sign change: an event function that dips through zero and back *inside* one
@@ -72,15 +82,21 @@ def make_grazing_probe(events, n_events, dense_eval):
     touch for a few milliseconds per period -- a whole stick phase is lost (measured: F_mean
     of a sine-dithered Stribeck contact 0.75 % off, tests/engine/test_engine_grazing.py).
 
-    For each event that moves toward zero at the step start and away from it at the end,
-    the cubic Hermite interpolant of ``g(theta)`` (values at the ends, slopes by one-sided
-    differences on the dense output) locates its extremum ``theta_m``; the events are
-    evaluated there on the dense output (into ``gb``) and ``theta_m`` is returned when one
-    has the opposite sign of ``g0`` -- the bracket ``[0, theta_m]`` then holds the first
-    root. Otherwise 2.0. Two extra event evaluations per step, compiled in only for scenes
-    whose events mark jumps (``Problem.graze``).
+    An event is a candidate when it moves toward zero at the step start and away from it at
+    the end (slopes by one-sided differences on the dense output). Its extremum on the dense
+    output is then searched by golden section, stopping as soon as a point on the other side
+    of zero turns up: that ``theta`` is returned (``gb`` = the events there), so
+    ``[0, theta]`` brackets the first root. Otherwise 2.0. Two event evaluations per step,
+    a search only on candidate steps (about one per dip); compiled in only for scenes whose
+    events mark jumps (``Problem.graze``).
     """
     eps = 1e-6
+
+    @njit(error_model="numpy", refcount=False)
+    def side(t, hh, y, Q, p, sq, i, th, ytmp, gb):
+        dense_eval(y, hh, Q, th, ytmp)
+        events(t + th * hh, ytmp, p, sq, gb)
+        return gb[i]
 
     @njit(error_model="numpy", refcount=False)
     def probe(t, hh, y, Q, p, sq, g0, g1, ytmp, gb, ga):
@@ -93,31 +109,30 @@ def make_grazing_probe(events, n_events, dense_eval):
             a, b = g0[i], g1[i]
             if not a * b > 0.0:
                 continue                          # a crossing, or a muted event
-            d0, d1 = (ga[i] - a) / eps, (b - gb[i]) / eps
-            if not (d0 * a < 0.0 and d1 * b > 0.0):
+            if not ((ga[i] - a) * a < 0.0 and (b - gb[i]) * b > 0.0):
                 continue                          # not heading to zero and back
-            # p(th) = a + d0 th + B th^2 + C th^3; p'(th) = d0 + 2 B th + 3 C th^2 = 0
-            B = 3.0 * (b - a) - 2.0 * d0 - d1
-            C = 2.0 * (a - b) + d0 + d1
-            th = 2.0
-            if abs(C) < 1e-12 * (abs(B) + abs(d0)):
-                if B != 0.0:
-                    th = -d0 / (2.0 * B)
-            else:
-                disc = B * B - 3.0 * C * d0
-                if disc >= 0.0:
-                    r = math.sqrt(disc)
-                    for cand in ((-B - r) / (3.0 * C), (-B + r) / (3.0 * C)):
-                        if 0.0 < cand < th:
-                            th = cand
-            if 0.0 < th < best:
-                best = th
+            s = 1.0 if a > 0.0 else -1.0          # minimise s g on [0, 1]
+            lo, hi = 0.0, 1.0
+            x1, x2 = hi - GOLDEN, lo + GOLDEN
+            f1 = s * side(t, hh, y, Q, p, sq, i, x1, ytmp, gb)
+            f2 = s * side(t, hh, y, Q, p, sq, i, x2, ytmp, gb)
+            for _ in range(GRAZE_ITER):
+                if f1 < 0.0 or f2 < 0.0:
+                    th = x1 if f1 < 0.0 else x2
+                    best = min(best, th)
+                    break
+                if f1 < f2:
+                    hi, x2, f2 = x2, x1, f1
+                    x1 = hi - GOLDEN * (hi - lo)
+                    f1 = s * side(t, hh, y, Q, p, sq, i, x1, ytmp, gb)
+                else:
+                    lo, x1, f1 = x1, x2, f2
+                    x2 = lo + GOLDEN * (hi - lo)
+                    f2 = s * side(t, hh, y, Q, p, sq, i, x2, ytmp, gb)
         if best < 1.0:
             dense_eval(y, hh, Q, best, ytmp)
             events(t + best * hh, ytmp, p, sq, gb)
-            for i in range(n_events):
-                if g0[i] * gb[i] < 0.0:
-                    return best
+            return best
         return 2.0
 
     return probe
