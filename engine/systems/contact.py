@@ -8,9 +8,10 @@
 Parameters are dimensional SI (engine.params.CONTACT_DEFAULTS). ``sine-force`` has no
 meaning without a mass and is refused. Quadrature states follow ``z`` when needed:
 ``y[QF]`` = running integral of F (``F_mean``), ``y[QX]`` = running integral of u (the
-displacement, for ``v_mean`` / ``v_slow_p2p``); neither is under error control. The static
-laws have no state here: ``F = g(u) sgn(u) + sigma2 u`` and, inside the Karnopp band, the
-holding force 0 (nothing drives the contact).
+displacement, for ``v_mean`` / ``v_slow_p2p``); with a bristle law neither is under error
+control. The static laws have no state here: ``F = g(u) sgn(u) + sigma2 u`` and, inside the
+Karnopp band, the holding force 0 (nothing drives the contact); the quadratures are then
+the only dynamics and are error-controlled (:func:`error_size`).
 """
 from __future__ import annotations
 
