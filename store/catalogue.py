@@ -15,11 +15,17 @@ Counts: ``done_points`` have a final status (ok, failed or non-finite),
 States: ``queued`` (registered, nothing run), ``running``, ``partial`` (stopped
 with points still to compute), ``done`` (every point has a final status, maybe
 failed ones), ``failed`` (the run itself aborted).
+
+A ``running`` row names its submitting process in ``owner`` (``host:pid``). A submitter
+that was killed cannot update its row, so readers ask :meth:`Catalogue.live_state`: a
+``running`` row whose owner is on this host and no longer exists reads ``stalled``
+(resubmitting the spec resumes it from the journal). Owners on other hosts are trusted.
 """
 
 from __future__ import annotations
 
 import os
+import socket
 import sqlite3
 import threading
 import warnings
@@ -35,7 +41,9 @@ from .cube import FAILED, NON_FINITE, NOT_COMPUTED
 from .layout import CATALOGUE_NAME, CUBE_NAME
 
 STATES = ("queued", "running", "partial", "done", "failed")
-UPDATABLE = ("state", "done_points", "failed_points", "done_blocks", "n_blocks", "message", "path")
+UPDATABLE = ("state", "done_points", "failed_points", "done_blocks", "n_blocks", "message", "path",
+             "owner")
+STALLED = "stalled"   # derived, never stored: running, but its submitter is gone
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS sweeps (
     sweep_id      TEXT PRIMARY KEY,
@@ -50,7 +58,8 @@ CREATE TABLE IF NOT EXISTS sweeps (
     path          TEXT NOT NULL,
     message       TEXT NOT NULL DEFAULT '',
     created       TEXT NOT NULL,
-    updated       TEXT NOT NULL
+    updated       TEXT NOT NULL,
+    owner         TEXT NOT NULL DEFAULT ''
 )"""
 _UPSERT = """
 INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_points,
@@ -61,6 +70,25 @@ ON CONFLICT(sweep_id) DO UPDATE SET name = excluded.name, spec_json = excluded.s
     n_points = excluded.n_points, n_blocks = excluded.n_blocks, path = excluded.path,
     updated = excluded.updated"""
 _ADOPT = _UPSERT.split(" ON CONFLICT")[0] + " ON CONFLICT(sweep_id) DO NOTHING"
+
+
+def owner_tag() -> str:
+    """``host:pid`` of this process, for the ``owner`` of a running sweep."""
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def _owner_alive(owner: str) -> bool:
+    """False only when ``owner`` is a process of this host that no longer exists."""
+    host, _, pid = owner.rpartition(":")
+    if host != socket.gethostname() or not pid.isdigit():
+        return True
+    try:
+        os.kill(int(pid), 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:       # exists, someone else's
+        return True
+    return True
 
 
 def _now() -> str:
@@ -89,6 +117,9 @@ class Catalogue:
         with self._connection() as con:
             con.execute("PRAGMA journal_mode=WAL")
             con.execute(_SCHEMA)
+            columns = {row["name"] for row in con.execute("PRAGMA table_info(sweeps)")}
+            if "owner" not in columns:   # a catalogue written before owners existed
+                con.execute("ALTER TABLE sweeps ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
 
     def __repr__(self) -> str:
         return f"Catalogue({str(self.root)!r})"
@@ -185,6 +216,14 @@ class Catalogue:
         if cur.rowcount == 0:
             raise LookupError(f"Catalogue.update: no sweep with id {sweep_id!r}; register it first")
         return self.get(sweep_id)
+
+    @staticmethod
+    def live_state(row: dict) -> str:
+        """The row's state, except ``stalled`` for a ``running`` row whose submitting
+        process (``owner``, on this host) is gone."""
+        if row["state"] == "running" and row.get("owner") and not _owner_alive(row["owner"]):
+            return STALLED
+        return row["state"]
 
     def get(self, sweep_id: str) -> dict:
         """The row of ``sweep_id`` (exact id), as a dict; ``LookupError`` if unknown."""

@@ -85,9 +85,13 @@ def cmd_status(args) -> int:
     if args.sweep:
         sweep_id, cube = resolve_sweep(store_root(args.store), args.sweep)
         row = cat.get(sweep_id)
+        row["state"] = cat.live_state(row)
         for key, value in row.items():
             if key != "spec_json":
                 print(f"{key:>14}: {value}")
+        if row["state"] == store.catalogue.STALLED:
+            print(f"{'':>16}the submitting process ({row['owner']}) is gone; submit the spec "
+                  "again to resume (finished blocks are kept)")
         _print_error_estimate(store.open_cube(cube))
         return 0
     rows = cat.list()
@@ -96,7 +100,7 @@ def cmd_status(args) -> int:
         return 0
     print(f"{'sweep':<13}{'name':<24}{'state':<9}{'points':>8}{'done':>8}{'failed':>8}  updated")
     for r in rows:
-        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{r['state']:<9}{r['n_points']:>8}"
+        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{cat.live_state(r):<9}{r['n_points']:>8}"
               f"{r['done_points']:>8}{r['failed_points']:>8}  {r['updated']}")
     return 0
 

@@ -155,7 +155,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     sweep.write_spec(plan.spec.to_json())
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
                        len(plan.blocks), sweep.root)
-    catalogue.update(plan.sweep_id, state="running")
+    catalogue.update(plan.sweep_id, state="running", owner=store.catalogue.owner_tag())
     store.publish(cube, sweep.cube)  # a valid cube exists from the first instant
     todo = todo[:max_blocks] if max_blocks is not None else todo
     sink = BlockSink(plan, cube, journal, sweep, catalogue)
@@ -266,7 +266,7 @@ def _result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings) -> SubmitR
         state = "partial"
     else:
         state = "failed" if counts["failed_points"] else "done"
-    catalogue.update(plan.sweep_id, state=state, **counts)
+    catalogue.update(plan.sweep_id, state=state, owner="", **counts)
     n_ok = counts["done_points"] - counts["failed_points"]
     return SubmitResult(plan.sweep_id, sweep.cube, state, n, n_ok, counts["failed_points"],
                         blocks_run, len(plan.blocks), time.perf_counter() - t0, timings)

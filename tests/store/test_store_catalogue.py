@@ -164,3 +164,32 @@ def test_two_processes_update_concurrently(tmp_path):
     for i in range(2):
         assert (rows[f"writer{i}"]["state"], rows[f"writer{i}"]["done_points"]) == ("done", n)
     assert rows["shared"]["message"] in {f"writer0 {n - 1}", f"writer1 {n - 1}"}
+
+
+def test_running_row_of_a_dead_owner_reads_stalled_and_old_catalogues_migrate(tmp_path):
+    import sqlite3
+    import subprocess
+    import sys
+
+    from store.catalogue import STALLED, Catalogue, owner_tag
+
+    # a catalogue written before the owner column existed gains it on open
+    con = sqlite3.connect(tmp_path / "catalogue.sqlite")
+    con.execute("CREATE TABLE sweeps (sweep_id TEXT PRIMARY KEY, name TEXT NOT NULL, "
+                "state TEXT NOT NULL, spec_json TEXT NOT NULL, n_points INTEGER NOT NULL, "
+                "n_blocks INTEGER NOT NULL, done_points INTEGER NOT NULL DEFAULT 0, "
+                "failed_points INTEGER NOT NULL DEFAULT 0, done_blocks INTEGER NOT NULL "
+                "DEFAULT 0, path TEXT NOT NULL, message TEXT NOT NULL DEFAULT '', "
+                "created TEXT NOT NULL, updated TEXT NOT NULL)")
+    con.commit()
+    con.close()
+    cat = Catalogue(tmp_path)
+    cat.register("abc", "s", "{}", 4, 1, tmp_path / "abc")
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True, check=True).stdout.strip()
+    host = owner_tag().rpartition(":")[0]
+    row = cat.update("abc", state="running", owner=f"{host}:{dead}")
+    assert row["state"] == "running" and cat.live_state(row) == STALLED
+    assert cat.live_state(cat.update("abc", owner=owner_tag())) == "running"   # alive: us
+    assert cat.live_state(cat.update("abc", owner=f"elsewhere:{dead}")) == "running"
+    assert cat.live_state(cat.update("abc", state="done", owner="")) == "done"

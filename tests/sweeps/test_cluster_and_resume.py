@@ -102,9 +102,16 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
     cube = crashed / spec.sweep_id / "cube.h5"
     with xr.open_dataset(cube, engine="h5netcdf") as ds:   # the published cube is readable
         assert set(np.unique(ds["status"].values)) <= {0, 1}
+    # the catalogue row still says running, but its owner is dead: status says stalled
+    listing = ditherlab("status", store=crashed, check=True).stdout
+    assert f"{spec.sweep_id[:12]}" in listing and "stalled" in listing, listing
+    detail = ditherlab("status", spec.sweep_id, store=crashed, check=True).stdout
+    assert "state: stalled" in detail and "submit the spec again to resume" in detail, detail
 
     resumed = ditherlab("submit", str(path), "--quiet", store=crashed, check=True)
     ran = int(resumed.stdout.split("ran ")[1].split(" blocks")[0])
     assert ran == n_blocks - before, resumed.stdout
+    detail = ditherlab("status", spec.sweep_id, store=crashed, check=True).stdout
+    assert "state: done" in detail and "owner: \n" in detail + "\n", detail
     ditherlab("submit", str(path), "--quiet", store=clean, check=True)
     assert_same_results(results(cube), results(clean / spec.sweep_id / "cube.h5"))
