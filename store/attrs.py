@@ -10,7 +10,8 @@ spaces) — the same form as the sweep spec — and ``decode`` turns it back.
 from __future__ import annotations
 
 import json
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

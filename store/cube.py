@@ -20,9 +20,9 @@ readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import importlib.metadata
+from collections.abc import Mapping
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Mapping
 
 import numpy as np
 import xarray as xr

@@ -20,9 +20,9 @@ from __future__ import annotations
 
 import os
 import secrets
+from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
-from typing import Callable
 
 CATALOGUE_NAME = "catalogue.sqlite"
 CUBE_NAME = "cube.h5"

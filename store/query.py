@@ -10,7 +10,7 @@ holds only ``v_d = 0.1`` is an error, not a silent substitution. Points whose ``
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
