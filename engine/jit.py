@@ -113,7 +113,8 @@ def _name_by_uuid(func, uuid: str | None) -> None:
     tag = uuid[len("ditherlab-"):][:16] if uuid else secrets.token_hex(8)
     name = f"{func.__qualname__}__{tag}"
     func.__qualname__ = name
-    func.__code__ = func.__code__.replace(co_qualname=name)
+    if hasattr(func.__code__, "co_qualname"):     # Python >= 3.11
+        func.__code__ = func.__code__.replace(co_qualname=name)
 
 
 def njit(fn=None, *, refcount: bool = True, **options):
