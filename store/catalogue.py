@@ -88,7 +88,11 @@ def _owner_alive(owner: str) -> bool:
         return False
     except PermissionError:       # exists, someone else's
         return True
-    return True
+    try:                          # Linux: a killed child its parent has not reaped yet
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rpartition(")")[2].split()[0] != "Z"
+    except (OSError, IndexError):
+        return True
 
 
 def _now() -> str:
@@ -119,7 +123,11 @@ class Catalogue:
             con.execute(_SCHEMA)
             columns = {row["name"] for row in con.execute("PRAGMA table_info(sweeps)")}
             if "owner" not in columns:   # a catalogue written before owners existed
-                con.execute("ALTER TABLE sweeps ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
+                try:
+                    con.execute("ALTER TABLE sweeps ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
+                except sqlite3.OperationalError as err:   # another process added it first
+                    if "duplicate column" not in str(err):
+                        raise
 
     def __repr__(self) -> str:
         return f"Catalogue({str(self.root)!r})"

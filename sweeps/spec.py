@@ -169,8 +169,16 @@ class Spec(_Strict):
         return v
 
     def canonical(self) -> dict:
-        """The result-changing content as plain data (no cosmetic fields)."""
-        return self.model_dump(mode="json", exclude=set(COSMETIC))
+        """The result-changing content as plain data (no cosmetic fields).
+
+        A field added later with a default that reproduces the old behaviour is left out
+        at that default, so existing sweeps keep their ids (and resume): ``atol_units``.
+        """
+        data = self.model_dump(mode="json", exclude=set(COSMETIC))
+        acc = data.get("accuracy")
+        if isinstance(acc, dict) and acc.get("atol_units") == "absolute":
+            del acc["atol_units"]
+        return data
 
     @property
     def sweep_id(self) -> str:

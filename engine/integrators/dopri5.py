@@ -32,7 +32,6 @@ from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
     CFG_RTOL,
-    CFG_SAMPLE_DT,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
@@ -42,6 +41,7 @@ from .problem import (
     make_sampler,
     no_sample,
     record_step,
+    sample_due,
 )
 from .stepsize import make_initial_step
 from .tableau import ButcherTableau
@@ -77,6 +77,7 @@ TABLEAU = ButcherTableau(
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 STRETCH = 1.01      # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
+FAR_SIDE = 1e-300     # event value of a landing exactly on the corner, moved past it
 LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
 W_H, W_REJ, W_K = 0, 1, 2   # work state: step size, reject flag, next sampling index
 
@@ -257,16 +258,18 @@ def make_stepper(problem) -> Stepper:
                         state[W_REJ] = 1.0
                         continue
                     events(t + hh, Y[1], p, sq, G[1])
-                    if G[1, idx] * G[0, idx] <= 0.0:
-                        G[1, idx] = 0.0   # reached or passed: mute it for the next step
-                    # else: fell short (dense output across the corner is only O(h^3)
-                    # exact); the next step finds the root again, from the near side
+                    if G[1, idx] == 0.0:   # on the corner: count it as passed
+                        G[1, idx] = -math.copysign(FAR_SIDE, G[0, idx])
+                    # passed (the locator aims at the far side): the next step starts
+                    # beyond the corner and sees a crossing back (leaving a band it just
+                    # entered). Fell short (dense output across the corner is only O(h^3)
+                    # exact): the next step finds the root again, from the near side
             if needs_mid:
                 coeffs(K, Q)
                 dense_eval(y, hh, Q, 0.5, Y[2])
             t_new = t1 if last else t + hh
             observe(t, y, t_new, Y[1], Y[2], p, sq, obs)
-            if sampling and state[W_K] * cfg[CFG_SAMPLE_DT] <= t_new:
+            if sampling and sample_due(state[W_K], cfg, t_new):
                 coeffs(K, Q)
                 state[W_K] = emit(t, hh, t_new, y, Y[1], Q, p, sq, cfg, obs, ctr, rec,
                                   state[W_K], Y[3])

@@ -52,8 +52,11 @@ def make_locator(events, n_events, dense_eval):
                 break
         # the root lies in [a, b]; b is on the far side, a on the near side. Land on the
         # far side: the next step then starts past the corner, and a crossing back within
-        # it (leaving the Karnopp band it just entered) is a sign change it sees
-        return b
+        # it (leaving the Karnopp band it just entered) is a sign change it sees. (Not
+        # converged within MAX_ITER: the end closer to the root.)
+        if b - a < THETA_TOL:
+            return b
+        return a if abs(fa) < abs(fb) else b
 
     @njit(error_model="numpy", refcount=False)
     def locate(t, hh, y, Q, p, sq, g0, g1, ytmp, gtmp, th_b=1.0):
@@ -104,22 +107,22 @@ def make_grazing_probe(events, n_events, dense_eval):
         events(t + eps * hh, ytmp, p, sq, ga)
         dense_eval(y, hh, Q, 1.0 - eps, ytmp)
         events(t + (1.0 - eps) * hh, ytmp, p, sq, gb)
+        for i in range(n_events):    # ga[i] <- 1.0 for the candidates (gb is reused below)
+            a, b = g0[i], g1[i]
+            heading = (ga[i] - a) * a < 0.0 and (b - gb[i]) * b > 0.0
+            ga[i] = 1.0 if (a * b > 0.0 and heading) else 0.0
         best = 2.0
         for i in range(n_events):
-            a, b = g0[i], g1[i]
-            if not a * b > 0.0:
-                continue                          # a crossing, or a muted event
-            if not ((ga[i] - a) * a < 0.0 and (b - gb[i]) * b > 0.0):
-                continue                          # not heading to zero and back
-            s = 1.0 if a > 0.0 else -1.0          # minimise s g on [0, 1]
+            if ga[i] == 0.0:
+                continue                          # a crossing, muted, or no dip
+            s = 1.0 if g0[i] > 0.0 else -1.0      # minimise s g on [0, 1]
             lo, hi = 0.0, 1.0
             x1, x2 = hi - GOLDEN, lo + GOLDEN
             f1 = s * side(t, hh, y, Q, p, sq, i, x1, ytmp, gb)
             f2 = s * side(t, hh, y, Q, p, sq, i, x2, ytmp, gb)
             for _ in range(GRAZE_ITER):
                 if f1 < 0.0 or f2 < 0.0:
-                    th = x1 if f1 < 0.0 else x2
-                    best = min(best, th)
+                    best = min(best, x1 if f1 < 0.0 else x2)
                     break
                 if f1 < f2:
                     hi, x2, f2 = x2, x1, f1

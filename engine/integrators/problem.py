@@ -90,6 +90,15 @@ def no_sample(t, y, p, sq, obs, ctr, rec):
     """The ``sample`` hook of a problem without sampling (never called)."""
 
 
+ROUNDOFF = 4e-16   # relative: an instant k * dt this close past a step end falls on it
+
+
+@njit(inline="always", error_model="numpy")
+def sample_due(k, cfg, t_new):
+    """True when the sampling instant ``k * dt`` falls in a step ending at ``t_new``."""
+    return k * cfg[CFG_SAMPLE_DT] <= t_new + ROUNDOFF * abs(t_new)
+
+
 def make_sampler(sample, dense_eval):
     """Sampling at requested instants from a method's dense output, without stopping there.
 
@@ -102,7 +111,8 @@ def make_sampler(sample, dense_eval):
     Returns njit ``first(t0, y, p, sq, cfg, obs, ctr, rec) -> k`` (the first index at or
     after ``t0``, sampling ``t0`` itself when it is an instant; ``inf`` when ``dt <= 0``) and
     ``emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec, k, ytmp) -> k``. An instant
-    equal to ``t_new`` takes the step-end state ``yn`` (no interpolation error).
+    equal to ``t_new`` (or past it by the round-off of ``k * dt``, e.g. ``3 * 0.1 > 0.3``)
+    takes the step-end state ``yn`` (no interpolation error).
     """
     @njit(error_model="numpy", refcount=False)
     def first(t0, y, p, sq, cfg, obs, ctr, rec):
@@ -118,9 +128,12 @@ def make_sampler(sample, dense_eval):
     @njit(error_model="numpy", refcount=False)
     def emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec, k, ytmp):
         dt = cfg[CFG_SAMPLE_DT]
+        if not dt > 0.0:
+            return k
         ts = k * dt
-        while ts <= t_new:
-            if ts == t_new:
+        end = t_new + ROUNDOFF * abs(t_new)
+        while ts <= end:
+            if ts >= t_new:        # on the step end, or past it by round-off of k * dt
                 sample(ts, yn, p, sq, obs, ctr, rec)
             else:
                 dense_eval(y, hh, Q, (ts - t) / hh, ytmp)

@@ -19,7 +19,6 @@ from ..jit import njit
 from .problem import (
     CFG_H,
     CFG_MAX_STEPS,
-    CFG_SAMPLE_DT,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
@@ -28,6 +27,7 @@ from .problem import (
     make_sampler,
     no_sample,
     record_step,
+    sample_due,
 )
 from .tableau import ButcherTableau
 
@@ -115,7 +115,7 @@ def make_stepper(problem) -> Stepper:
             ctr[CTR_STEPS] += 1
             ctr[CTR_EVALS] += 4
             observe(t, y0, t_new, y, ym, p, sq, obs)
-            if sampling and state[0] * cfg[CFG_SAMPLE_DT] <= t_new:
+            if sampling and sample_due(state[0], cfg, t_new):
                 coeffs(k1, k2, k3, k4, Q)
                 state[0] = emit(t, h, t_new, y0, y, Q, p, sq, cfg, obs, ctr, rec, state[0],
                                 ytmp)

@@ -43,7 +43,6 @@ from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
     CFG_RTOL,
-    CFG_SAMPLE_DT,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
@@ -53,6 +52,7 @@ from .problem import (
     make_sampler,
     no_sample,
     record_step,
+    sample_due,
 )
 from .rosenbrock import RosenbrockTableau
 from .rosenbrock_ops import (
@@ -99,6 +99,7 @@ TABLEAU = RosenbrockTableau(
 )
 STRETCH = 1.01       # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
+FAR_SIDE = 1e-300    # event value of a landing exactly on the corner, moved past it
 MAX_SHORT = 2        # landings in a row that fall short of the same kink before it is passed
 # scalar slots of the work state
 W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP, W_SHORT, W_K = 0, 1, 2, 3, 4, 5, 6  # W_K: next sample
@@ -317,8 +318,13 @@ def make_stepper(problem) -> Stepper:
         if err <= 1.0:
             events(t + hh, yn, p, sq, G[1])
             state[W_SHORT] = 0.0 if G[1, idx] * G[0, idx] <= 0.0 else state[W_SHORT] + 1.0
-            if state[W_SHORT] == 0.0 or state[W_SHORT] > MAX_SHORT:
-                G[1, idx] = 0.0   # reached or passed: mute it for the next step
+            if state[W_SHORT] == 0.0:
+                # passed (the locator aims at the far side): the next step starts beyond
+                # the corner and sees a crossing back (leaving a band it just entered)
+                if G[1, idx] == 0.0:
+                    G[1, idx] = -math.copysign(FAR_SIDE, G[0, idx])
+            elif state[W_SHORT] > MAX_SHORT:
+                G[1, idx] = 0.0   # unreachable: mute it for the next step
                 state[W_SHORT] = 0.0
             # else it fell short (the dense output is O(h^4) off across the corner): the
             # next step finds the root again, from the near side -- at most MAX_SHORT
@@ -372,7 +378,7 @@ def make_stepper(problem) -> Stepper:
                 dense_eval(y, hh, Q, 0.5, ym)
             t_new = t1 if last else t + hh
             observe(t, y, t_new, yn, ym, p, sq, obs)
-            if sampling and state[W_K] * cfg[CFG_SAMPLE_DT] <= t_new:
+            if sampling and sample_due(state[W_K], cfg, t_new):
                 coeffs(y, yn, U, Q)
                 state[W_K] = emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec,
                                   state[W_K], Y[3])

@@ -62,3 +62,37 @@ def test_band_dips_are_landed_on_and_F_mean_follows_the_tolerance(method, refere
             assert max(gap) < 1e-9, gap
     # measured: dopri5 5.1e-5, 5.7e-7, 4.3e-9; rodas4 1.2e-5, 1.3e-7, 1.1e-9 (rel.)
     assert errs[0] > errs[2] and all(e <= 20 * r for e, r in zip(errs, (1e-5, 1e-7, 1e-9))), errs
+
+
+def _probe_for(order):
+    """A grazing probe over two events on a step from s = 0 to 1 (the state is s itself):
+    one with a minimum at 0.3 that stays above zero, one that dips below zero near 0.8."""
+    from numba import njit
+
+    from engine.integrators.events import make_grazing_probe
+
+    i_high, i_dip = order
+
+    @njit
+    def dense_eval(y, hh, Q, th, out):
+        out[0] = y[0] + hh * th
+
+    @njit
+    def events(t, y, p, sq, g):
+        g[i_high] = (y[0] - 0.3) ** 2 + 0.1
+        g[i_dip] = (y[0] - 0.8) ** 2 - 0.001
+
+    return make_grazing_probe(events, 2, dense_eval), events
+
+
+@pytest.mark.parametrize("order", [(0, 1), (1, 0)])
+def test_grazing_probe_does_not_depend_on_event_order(order):
+    """The dip (roots 0.8 -+ 0.0316) is found whichever index the events have."""
+    probe, events = _probe_for(order)
+    g0, g1, gb, ga = np.zeros(2), np.zeros(2), np.zeros(2), np.zeros(2)
+    events(0.0, np.zeros(1), None, 1.0, g0)
+    events(1.0, np.ones(1), None, 1.0, g1)
+    th = probe(0.0, 1.0, np.zeros(1), np.zeros((1, 1)), np.zeros(1), 1.0, g0, g1,
+               np.zeros(1), gb, ga)
+    assert 0.8 - 0.0317 < th < 0.8 + 0.0317
+    assert gb[order[1]] < 0.0 < gb[order[0]]        # the events at theta: the bracket end

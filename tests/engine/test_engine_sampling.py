@@ -62,3 +62,23 @@ def test_sampling_does_not_touch_the_trajectory(method):
 def test_record_dt_must_be_positive():
     with pytest.raises(ValueError, match="record_dt must be > 0"):
         simulate(scene("lugre", "none", outputs=("v_mean",)), P.pack(t_end=1.0), record_dt=0.0)
+
+
+def test_instant_at_t_end_is_kept_despite_rounding_and_bad_dt_samples_nothing():
+    """3 * 0.1 = 0.30000000000000004 > t_end = 0.3: the instant still falls on the last step
+    end. A non-positive spacing in cfg (only reachable below the API) samples nothing and
+    must not hang."""
+    from engine.integrators.problem import CTR_NREC, CTR_SIZE
+    from engine.kernels import point_kernel, settings_to_cfg
+
+    sc = scene("lugre", "none", outputs=("v_mean",))
+    r = simulate(sc, P.pack(t_end=0.3, v_ref=0.4), record_dt=0.1)
+    assert len(r.t) == 4 and r.t[-1] == 3 * 0.1
+    np.testing.assert_array_equal(r.y[-1], r.y_end)
+    pk = point_kernel(sc, sampled_record=True)
+    for dt in (0.0, -0.1):
+        ctr, rec = np.zeros(CTR_SIZE, np.int64), np.empty((10, pk.n + 1))
+        status = pk.run_point(P.pack(t_end=0.3, v_ref=0.4), settings_to_cfg(Settings(), 1, dt),
+                              pk.alloc(), np.empty(pk.n), np.empty(pk.obs_size),
+                              np.empty(len(pk.names)), ctr, rec)
+        assert status == 0 and ctr[CTR_NREC] == 0

@@ -193,3 +193,28 @@ def test_running_row_of_a_dead_owner_reads_stalled_and_old_catalogues_migrate(tm
     assert cat.live_state(cat.update("abc", owner=owner_tag())) == "running"   # alive: us
     assert cat.live_state(cat.update("abc", owner=f"elsewhere:{dead}")) == "running"
     assert cat.live_state(cat.update("abc", state="done", owner="")) == "done"
+
+
+def test_a_killed_unreaped_submitter_reads_stalled(tmp_path):
+    """A submitter killed while its parent has not yet reaped it is a zombie: still in the
+    process table (os.kill(pid, 0) succeeds), but gone."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from store.catalogue import STALLED, Catalogue, owner_tag
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        cat = Catalogue(tmp_path)
+        cat.register("z", "s", "{}", 1, 1, tmp_path / "z")
+        host = owner_tag().rpartition(":")[0]
+        row = cat.update("z", state="running", owner=f"{host}:{child.pid}")
+        assert cat.live_state(row) == "running"
+        child.send_signal(signal.SIGKILL)
+        time.sleep(0.5)                       # dead, not reaped: a zombie
+        assert cat.live_state(row) == STALLED
+    finally:
+        child.kill()
+        child.wait()
