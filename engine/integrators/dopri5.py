@@ -39,7 +39,6 @@ from .problem import (
     FRESH_START,
     Stepper,
     make_sampler,
-    no_sample,
     record_step,
     sample_due,
 )
@@ -187,7 +186,7 @@ def make_stepper(problem) -> Stepper:
     initial_step = make_initial_step(n, n_err, rhs, ORDER)
     locate = make_locator(events, n_ev, dense_eval)
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
-    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
+    first_sample, emit = make_sampler(problem, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(inline="always", error_model="numpy")

@@ -99,8 +99,11 @@ def sample_due(k, cfg, t_new):
     return k * cfg[CFG_SAMPLE_DT] <= t_new + ROUNDOFF * abs(t_new)
 
 
-def make_sampler(sample, dense_eval):
+def make_sampler(problem, dense_eval):
     """Sampling at requested instants from a method's dense output, without stopping there.
+
+    ``problem.sample`` is the hook (:func:`no_sample` when ``problem.sampling`` is off: the
+    method then never calls ``first``/``emit``, whose compilation stays trivial).
 
     The instants are ``t_k = k * dt`` (``dt = cfg[CFG_SAMPLE_DT]``, computed from ``k``,
     never accumulated) with ``t_k >= cfg[CFG_SAMPLE_T0]``. A method keeps the next ``k``
@@ -114,6 +117,8 @@ def make_sampler(sample, dense_eval):
     equal to ``t_new`` (or past it by the round-off of ``k * dt``, e.g. ``3 * 0.1 > 0.3``)
     takes the step-end state ``yn`` (no interpolation error).
     """
+    sample = problem.sample if problem.sampling else no_sample
+
     @njit(error_model="numpy", refcount=False)
     def first(t0, y, p, sq, cfg, obs, ctr, rec):
         dt = cfg[CFG_SAMPLE_DT]

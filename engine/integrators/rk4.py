@@ -25,7 +25,6 @@ from .problem import (
     FRESH_START,
     Stepper,
     make_sampler,
-    no_sample,
     record_step,
     sample_due,
 )
@@ -75,7 +74,7 @@ def make_stepper(problem) -> Stepper:
     n, rhs, observe = problem.n, problem.rhs, problem.observe
     record, needs_mid, sampling = problem.record, problem.needs_mid, problem.sampling
     coeffs, dense_eval = _make_dense(TABLEAU, n)
-    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
+    first_sample, emit = make_sampler(problem, dense_eval)
     a21, a32, a43 = (float(TABLEAU.a[1, 0]), float(TABLEAU.a[2, 1]), float(TABLEAU.a[3, 2]))
     b1, b2, b3, b4 = (float(x) for x in TABLEAU.b)
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])

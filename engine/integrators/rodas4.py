@@ -50,7 +50,6 @@ from .problem import (
     FRESH_START,
     Stepper,
     make_sampler,
-    no_sample,
     record_step,
     sample_due,
 )
@@ -247,7 +246,7 @@ def make_stepper(problem) -> Stepper:
     locate = make_locator(events, n_ev, dense_eval)
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     sampling = problem.sampling
-    first_sample, emit = make_sampler(problem.sample if sampling else no_sample, dense_eval)
+    first_sample, emit = make_sampler(problem, dense_eval)
     n_g = max(n_ev, 1)
 
     @njit(error_model="numpy")
