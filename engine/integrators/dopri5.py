@@ -27,7 +27,7 @@ import numpy as np
 
 from .. import status as S
 from ..jit import njit
-from .events import make_grazing_probe, make_locator
+from .events import make_grazing_probe, make_locator, past_corner, sign_change
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -76,7 +76,6 @@ TABLEAU = ButcherTableau(
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
 STRETCH = 1.01      # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
-FAR_SIDE = 1e-300     # event value of a landing exactly on the corner, moved past it
 LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
 W_H, W_REJ, W_K = 0, 1, 2   # work state: step size, reject flag, next sampling index
 
@@ -157,15 +156,6 @@ def _make_dense(tab, n):
 
 
 @njit(error_model="numpy", refcount=False)
-def _sign_change(g0, g1, m):
-    """True if any of the first m event functions changed sign (a zero is no change)."""
-    for i in range(m):
-        if g0[i] * g1[i] < 0.0:
-            return True
-    return False
-
-
-@njit(error_model="numpy", refcount=False)
 def _factor(err, reject_prev):
     """I-controller step factor for error ``err`` (non-finite -> FAC_MIN)."""
     if not math.isfinite(err):
@@ -232,7 +222,7 @@ def make_stepper(problem) -> Stepper:
             if n_ev:
                 events(t + hh, Y[1], p, sq, G[1])
                 th, idx = 2.0, -1
-                if _sign_change(G[0], G[1], n_ev):
+                if sign_change(G[0], G[1], n_ev):
                     coeffs(K, Q)
                     th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[2])
                 elif graze:   # a dip through zero and back inside the step
@@ -257,19 +247,17 @@ def make_stepper(problem) -> Stepper:
                         state[W_REJ] = 1.0
                         continue
                     events(t + hh, Y[1], p, sq, G[1])
-                    if G[1, idx] == 0.0:   # on the corner: count it as passed
-                        G[1, idx] = -math.copysign(FAR_SIDE, G[0, idx])
-                    # passed (the locator aims at the far side): the next step starts
-                    # beyond the corner and sees a crossing back (leaving a band it just
-                    # entered). Fell short (dense output across the corner is only O(h^3)
-                    # exact): the next step finds the root again, from the near side
+                    past_corner(G[0], G[1], idx)   # the locator aims at the far side
+                    # fell short (dense output across the corner is only O(h^3) exact):
+                    # the next step finds the root again, from the near side
             if needs_mid:
                 coeffs(K, Q)
                 dense_eval(y, hh, Q, 0.5, Y[2])
             t_new = t1 if last else t + hh
             observe(t, y, t_new, Y[1], Y[2], p, sq, obs)
             if sampling and sample_due(state[W_K], cfg, t_new):
-                coeffs(K, Q)
+                if not needs_mid:   # else Q holds this step's coefficients already
+                    coeffs(K, Q)
                 state[W_K] = emit(t, hh, t_new, y, Y[1], Q, p, sq, cfg, obs, ctr, rec,
                                   state[W_K], Y[3])
             for i in range(n):

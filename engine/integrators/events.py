@@ -16,6 +16,25 @@ from ..jit import njit
 
 THETA_TOL = 1e-13   # bracket width on theta at which the root is taken
 MAX_ITER = 60
+FAR_SIDE = 1e-300   # event value of a landing exactly on the corner, moved past it
+
+
+@njit(error_model="numpy", refcount=False)
+def sign_change(g0, g1, m):
+    """True if any of the first m event functions changed sign (a zero is no change)."""
+    for i in range(m):
+        if g0[i] * g1[i] < 0.0:
+            return True
+    return False
+
+
+@njit(error_model="numpy", refcount=False)
+def past_corner(g0, g1, i):
+    """After a landing on event ``i`` that reached its root: an end value of exactly zero
+    is moved to the far side, so the next step starts beyond the corner and sees a crossing
+    back (leaving a band it just entered) as a sign change."""
+    if g1[i] == 0.0:
+        g1[i] = -math.copysign(FAR_SIDE, g0[i])
 
 
 def make_locator(events, n_events, dense_eval):
@@ -71,8 +90,6 @@ def make_locator(events, n_events, dense_eval):
     return locate
 
 
-
-
 GOLDEN = 0.5 * (math.sqrt(5.0) - 1.0)
 GRAZE_ITER = 48     # golden-section steps: the bracket shrinks to 0.618**48 ~ 1e-10
 
@@ -90,8 +107,9 @@ def make_grazing_probe(events, n_events, dense_eval):
     output is then searched by golden section, stopping as soon as a point on the other side
     of zero turns up: that ``theta`` is returned (``gb`` = the events there), so
     ``[0, theta]`` brackets the first root. Otherwise 2.0. Two event evaluations per step,
-    a search only on candidate steps (about one per dip); compiled in only for scenes whose
-    events mark jumps (``Problem.graze``).
+    and a search (at most GRAZE_ITER dense evaluations) per candidate event -- a few per
+    minimum of ``|u|`` near the band; compiled in only for scenes whose events mark jumps
+    (``Problem.graze``).
     """
     eps = 1e-6
 

@@ -38,7 +38,7 @@ import numpy as np
 
 from .. import status as S
 from ..jit import njit
-from .events import make_grazing_probe, make_locator
+from .events import make_grazing_probe, make_locator, past_corner, sign_change
 from .problem import (
     CFG_ATOL_I,
     CFG_MAX_STEPS,
@@ -98,7 +98,6 @@ TABLEAU = RosenbrockTableau(
 )
 STRETCH = 1.01       # take the rest of a segment when it is within 1 % of h
 EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
-FAR_SIDE = 1e-300    # event value of a landing exactly on the corner, moved past it
 MAX_SHORT = 2        # landings in a row that fall short of the same kink before it is passed
 # scalar slots of the work state
 W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP, W_SHORT, W_K = 0, 1, 2, 3, 4, 5, 6  # W_K: next sample
@@ -221,15 +220,6 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit(error_model="numpy", refcount=False)
-def _sign_change(g0, g1, m):
-    """True if any of the first m event functions changed sign (a zero is no change)."""
-    for i in range(m):
-        if g0[i] * g1[i] < 0.0:
-            return True
-    return False
-
-
 def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, n_err, rhs, observe = problem.n, problem.n_err, problem.rhs, problem.observe
@@ -252,8 +242,8 @@ def make_stepper(problem) -> Stepper:
     @njit(error_model="numpy")
     def alloc():
         # U: stages; Y: yt, yn, ym, ytmp, f0, ft, r; Q: dense coefficients; G: event values
-        # at step start / end / scratch x2 / grazing probe; J, M, Minv: Jacobian, scratch, inverse of
-        # I / (h gamma) - J; state: W_* slots
+        # at step start / end / scratch x2 / grazing probe; J, M, Minv: Jacobian, scratch,
+        # inverse of I / (h gamma) - J; state: W_* slots
         return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((5, n_g)),
                 np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(7))
 
@@ -298,7 +288,7 @@ def make_stepper(problem) -> Stepper:
         U, Y, Q, G, state = work[0], work[1], work[2], work[3], work[7]
         yn, ytmp = Y[1], Y[3]
         events(t + hh, yn, p, sq, G[1])
-        if _sign_change(G[0], G[1], n_ev):
+        if sign_change(G[0], G[1], n_ev):
             coeffs(y, yn, U, Q)
             th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
         elif graze:   # a dip through zero and back inside the step (G[3]: jac scratch)
@@ -318,10 +308,7 @@ def make_stepper(problem) -> Stepper:
             events(t + hh, yn, p, sq, G[1])
             state[W_SHORT] = 0.0 if G[1, idx] * G[0, idx] <= 0.0 else state[W_SHORT] + 1.0
             if state[W_SHORT] == 0.0:
-                # passed (the locator aims at the far side): the next step starts beyond
-                # the corner and sees a crossing back (leaving a band it just entered)
-                if G[1, idx] == 0.0:
-                    G[1, idx] = -math.copysign(FAR_SIDE, G[0, idx])
+                past_corner(G[0], G[1], idx)   # the locator aims at the far side
             elif state[W_SHORT] > MAX_SHORT:
                 G[1, idx] = 0.0   # unreachable: mute it for the next step
                 state[W_SHORT] = 0.0
@@ -378,7 +365,8 @@ def make_stepper(problem) -> Stepper:
             t_new = t1 if last else t + hh
             observe(t, y, t_new, yn, ym, p, sq, obs)
             if sampling and sample_due(state[W_K], cfg, t_new):
-                coeffs(y, yn, U, Q)
+                if not needs_mid:   # else Q holds this step's coefficients already
+                    coeffs(y, yn, U, Q)
                 state[W_K] = emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec,
                                   state[W_K], Y[3])
             for i in range(n):

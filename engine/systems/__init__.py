@@ -8,6 +8,7 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 from . import contact, slider
+from .laws import STATIC_LAWS
 
 MODULES = {"slider": slider, "contact": contact}
 
@@ -35,10 +36,11 @@ def make_system(scene) -> System:
     n, init = mod.make_init(scene)
     n_events, events = mod.make_events(scene)
     return System(
-        n=n, n_err=mod.error_size(scene), rhs=mod.make_rhs(scene), n_events=n_events, events=events,
+        n=n, n_err=mod.error_size(scene), rhs=mod.make_rhs(scene), n_events=n_events,
+        events=events,
         interface=mod.make_interface(scene), position=mod.make_position(scene),
         velocity=mod.make_velocity(scene), init=init, qf=mod.quadrature_index(scene),
-        scales=mod.make_scales(scene), event_jumps=scene.friction in ("coulomb", "stribeck"),
+        scales=mod.make_scales(scene), event_jumps=scene.friction in STATIC_LAWS,
     )
 
 

@@ -20,13 +20,10 @@ import numpy as np
 from .. import params as P
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
 from ..jit import njit
-from .laws import make_kinks, make_law
+from .laws import STATIC_LAWS, make_kinks, make_law
 
 Z = 0
 N_BASE = 1
-
-
-STATIC_LAWS = ("coulomb", "stribeck")
 
 
 def error_size(scene) -> int:

@@ -53,6 +53,9 @@ def make_damping(bristle_damping: bool):
     return sigma1
 
 
+STATIC_LAWS = ("coulomb", "stribeck")   # no bristle state; a Karnopp band, whose edges are jumps
+
+
 def make_law(scene):
     """njit ``law(u, z, hold, p) -> (dz, F, alpha)`` for ``scene.friction``."""
     maker = {"lugre": _bristle_law, "elastoplastic": _bristle_law,
