@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from ..jit import njit
+from .events import sign_change
 
 SAFETY, FAC_LO, FAC_HI = 0.9, 1.0 / 6.0, 5.0   # h_new = h / fac, fac in [FAC_LO, FAC_HI]
 
@@ -59,15 +60,6 @@ def invert(M, Minv):
 SQRT_EPS = float(np.sqrt(np.finfo(float).eps))
 
 
-@njit(error_model="numpy", refcount=False)
-def _crossed(g0, g1, m):
-    """True if an event function changed sign between g0 and g1 (g0 == 0: at the kink, no)."""
-    for i in range(m):
-        if g0[i] * g1[i] < 0.0:
-            return True
-    return False
-
-
 def make_fd_jacobian(n, n_err, rhs, n_events, events):
     """njit ``jac(t, y, f0, p, sq, J, yt, ft, atol, rtol, g0, g1)``: one-sided differences
     ``J = df/dy``.
@@ -92,7 +84,7 @@ def make_fd_jacobian(n, n_err, rhs, n_events, events):
             yt[j] = yj + step
             if n_events:
                 events(t, yt, p, sq, g1)
-                if _crossed(g0, g1, n_events):
+                if sign_change(g0, g1, n_events):
                     yt[j] = yj - step
             delta = yt[j] - yj
             rhs(t, yt, p, sq, ft)
@@ -130,9 +122,9 @@ def make_time_derivative(n, rhs, n_events, events):
         if n_events:
             events(t, y, p, sq, g0)
             events(t_hi, y, p, sq, g1)
-            hi_ok = not _crossed(g0, g1, n_events)
+            hi_ok = not sign_change(g0, g1, n_events)
             events(t_lo, y, p, sq, g1)
-            lo_ok = not _crossed(g0, g1, n_events)
+            lo_ok = not sign_change(g0, g1, n_events)
         if hi_ok and lo_ok:
             inv = 1.0 / (t_hi - t_lo)
             for i in range(n):
