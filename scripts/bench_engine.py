@@ -348,7 +348,7 @@ def print_speed(rows):
           "time: median of paired repeats)")
     print("  ratio C = engine / C same algorithm, each at its cheapest setting; same-N = at the "
           "engine's setting (same steps); vs best = engine / cheapest C of any algorithm")
-    hdr = (f"{'scene':9s} {'acc':>6s} {'method':11s} {'setting':11s} {'error':>9s} "
+    hdr = (f"{'scene':9s} {'acc':>6s} {'method':12s} {'setting':11s} {'error':>9s} "
            f"{'time ms':>9s} {'steps':>9s} {'evals':>10s} {'ns/eval':>8s} {'ratio C':>8s} "
            f"{'same-N':>7s} {'vs best':>8s}")
     print(hdr)
@@ -356,9 +356,9 @@ def print_speed(rows):
     x = lambda v: f"{v:.2f}x" if v else "-"
     for r in rows:
         if "error" not in r:
-            print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:11s} {r['setting']}")
+            print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:12s} {r['setting']}")
             continue
-        print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:11s} {r['setting']:11s} "
+        print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:12s} {r['setting']:11s} "
               f"{r['error']:9.2e} {1e3 * r['t']:9.3f} {r['steps']:9d} {r['evals']:10d} "
               f"{r['ns']:8.1f} {x(r['ratio']):>8s} {x(r['ratio_same']):>7s} "
               f"{x(r['vs_best']):>8s}")
