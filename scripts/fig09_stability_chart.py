@@ -5,8 +5,11 @@
 Square-velocity dither, LuGre, the Sec. 5.1 parameters, vd = 0.1 (a) and 0.01 (b).
 Like the paper, the chart covers the v_ref range where the undithered system is
 unstable (v_ref < v_c ~ 0.2986); a third panel shows vd = 0.01 over a wider v_ref range.
-Labels follow engine.analysis.chart (PU: unstable run from W = 0 at the same v_ref;
-SU: unstable but separated from W = 0). The kink W = v_ref uses the right derivative
+Labels come from store.query.stability_labels, the one implementation of DESIGN.md §1:
+PU = an unstable point whose 4-neighbour connected component of unstable points in the
+(v_ref, W) plane reaches W = 0 (so the primary zone, which "extends over the whole range of
+reference velocity", stays PU where it lifts off W = 0 above v_c); SU = an unstable point
+whose component does not. The kink W = v_ref uses the right derivative
 (side = +1). Prints the PU boundary, the SU extents, and for vd = 0.01 the thin
 unstable features on a fine grid (dW = 2e-5).
 """
@@ -23,10 +26,17 @@ from matplotlib.colors import ListedColormap
 from scipy.optimize import brentq
 
 from engine import params as P
-from engine.analysis import PU, SU, jacobian, max_real_eig, stability_chart
+from engine.analysis import jacobian, max_real_eig, stability_chart
+from store.query import PU, SU, stability_labels
 
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")
 CMAP = ListedColormap(["#dddddd", "white", "#d62728", "#1f77b4"])   # unknown, stable, PU, SU
+
+
+def labels(W, v, vd):
+    """(nW, nv) int8 stable / PU / SU labels of the averaged chart (store's rule)."""
+    c = stability_chart(W, v, P.pack(vd=vd))
+    return stability_labels(c["unstable"], c["valid"], w_axis=0, v_ref_axis=1, W=W)
 
 
 def runs(mask, axis):
@@ -51,7 +61,7 @@ def thin_features(vd=0.01):
     """SU features for vd = 0.01 on a fine W grid, as offsets W - v_ref."""
     v = np.linspace(0.005, 0.295, 59)
     W = np.arange(0.0, 0.6, 2e-5)
-    lab = stability_chart(W, v, P.pack(vd=vd))["labels"]
+    lab = labels(W, v, vd)
     print(f"\nvd = {vd}, fine grid dW = 2e-5: SU runs as W - v_ref (width)")
     for j in range(v.size):
         rs = runs(lab[:, j] == SU, W)
@@ -67,10 +77,10 @@ def main():
     vw = np.linspace(0.002, 1.0, 300)
     fig, ax = plt.subplots(1, 3, figsize=(15, 4.5))
     for k, (vd, vax) in enumerate([(0.1, v), (0.01, v), (0.01, vw)]):
-        c = stability_chart(W, vax, P.pack(vd=vd))
+        lab = labels(W, vax, vd)
         if k < 2:
-            describe(W, vax, c["labels"], vd, every=12)
-        ax[k].pcolormesh(vax, W, c["labels"], cmap=CMAP, vmin=-1.5, vmax=2.5, shading="nearest")
+            describe(W, vax, lab, vd, every=12)
+        ax[k].pcolormesh(vax, W, lab, cmap=CMAP, vmin=-1.5, vmax=2.5, shading="nearest")
         ax[k].set_title(f"vd = {vd}" + (" (wider v_ref)" if k == 2 else "") + ": red PU, blue SU")
         ax[k].set_xlabel("v_ref")
         ax[k].set_ylabel("W")

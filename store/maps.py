@@ -5,7 +5,9 @@ switch, safe in threads and on machines without a display). Every figure is
 ``FIGSIZE`` inches at ``DPI`` (980 x 700 pixels), written atomically.
 
 - ``stability_map``: v_ref on x, W on y; PU and SU shaded, their boundaries drawn
-  solid (PU) and dashed (SU) as in Fig. 9, and the line W = v_ref.
+  solid (PU) and dashed (SU) as in Fig. 9, and the line W = v_ref. The labels are
+  ``query.stability_chart``'s (connected components, ``query.stability_labels``,
+  DESIGN.md §1): the primary zone is one PU area wherever it lifts off W = 0.
 - ``stick_slip_map``: omega on x (log if the grid is log-spaced), W on y; the
   long-duration stick-slip zone of Fig. 14 shaded and outlined.
 - ``friction_curves``: effective friction against v_ref, one line per W.

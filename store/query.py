@@ -6,6 +6,11 @@ Every function takes a cube (``xarray.Dataset`` with dims ``AXES``) and an optio
 A value beyond either end of the grid by more than half the end step (a relative
 1e-9 on a one-value axis) is refused, so asking for ``v_d = 0.01`` of a cube that
 holds only ``v_d = 0.1`` is an error, not a silent substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
+
+``stability_labels`` is the one implementation of the PU / SU rule of DESIGN.md §1
+(connected components in the ``(v_ref, W)`` plane): ``stability_chart`` and the maps use
+it, and so do the users of ``engine.analysis.stability_chart`` (the Fig. 9 script, tests),
+whose ``unstable`` / ``valid`` arrays it labels (the engine may not import the store).
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 import xarray as xr
+from scipy import ndimage
 
 from .cube import AXES, OK, output_names
 
@@ -118,30 +124,122 @@ def _stability_source(ds: xr.Dataset) -> str:
     )
 
 
+def _plane_structure(ndim: int, plane_axes: tuple[int, int]) -> np.ndarray:
+    """4-neighbour structuring element of ``scipy.ndimage.label``: neighbours along the two
+    ``plane_axes`` only, so components never join across any other axis."""
+    structure = np.zeros((3,) * ndim, bool)
+    centre = [1] * ndim
+    structure[tuple(centre)] = True
+    for axis in plane_axes:
+        for side in (0, 2):
+            at = list(centre)
+            at[axis] = side
+            structure[tuple(at)] = True
+    return structure
+
+
+def stability_labels(
+    unstable, valid=None, *, v_ref_axis: int = 0, w_axis: int = 1, W=None, v_ref=None
+) -> np.ndarray:
+    """Stable / PU / SU / no-data labels of a stability chart: the one implementation.
+
+    The rule is DESIGN.md §1 ("Labels on a stability chart"), after the paper's Fig. 9:
+
+    - unstable grid points form connected components, 4-neighbour in the ``(v_ref, W)``
+      plane (``scipy.ndimage.label``; a diagonal contact does not connect);
+    - ``PU`` (primary unstable): an unstable point whose component contains a point at
+      the chart's smallest ``W`` (``W = 0`` on the paper's charts);
+    - ``SU`` (secondary unstable): an unstable point whose component does not;
+    - ``STABLE`` otherwise, and ``NO_DATA`` where ``valid`` is false (not computed,
+      failed, NaN): a no-data point is never part of a component, so it can split one.
+
+    A rule applied column by column (at each ``v_ref``, the unbroken run of unstable
+    points from the smallest ``W``) is wrong: above ``v_ref = 0.2986`` the undithered
+    equilibrium is stable, and the primary zone, which the paper says "extends over the
+    whole range of reference velocity" (Sec. 6, Fig. 9), would be cut there and called SU.
+
+    Parameters
+    ----------
+    unstable : bool array_like, at least 2-D
+        True where the averaged equilibrium is unstable.
+    valid : bool array_like, optional
+        False where there is no data (default: every point valid). Broadcast to
+        ``unstable``; an invalid point is labelled ``NO_DATA`` whatever ``unstable`` says.
+    v_ref_axis, w_axis : int
+        The two axes of the chart plane. Every other axis (omega, v_d, ...) indexes
+        independent charts: components never connect across them.
+    W, v_ref : 1-D array_like, optional
+        Coordinates along ``w_axis`` / ``v_ref_axis``. When given, points are put in
+        ascending order before labelling (neighbours are neighbours on the grid) and the
+        labels come back in the input order; without them the array is taken as already
+        ascending along both axes.
+
+    Returns
+    -------
+    numpy.ndarray
+        int8, the shape of ``unstable``: ``STABLE`` 0, ``PU`` 1, ``SU`` 2, ``NO_DATA`` -1.
+    """
+    unstable = np.asarray(unstable, bool)
+    if unstable.ndim < 2:
+        raise ValueError(f"stability_labels: needs a (v_ref, W) plane, got {unstable.shape}")
+    valid = np.ones(unstable.shape, bool) if valid is None else np.asarray(valid, bool)
+    valid = np.broadcast_to(valid, unstable.shape)
+    ndim = unstable.ndim
+    if not (-ndim <= v_ref_axis < ndim and -ndim <= w_axis < ndim):
+        raise ValueError(f"stability_labels: axes ({v_ref_axis}, {w_axis}) not in a {ndim}-D array")
+    v_ref_axis, w_axis = v_ref_axis % ndim, w_axis % ndim
+    if v_ref_axis == w_axis:
+        raise ValueError("stability_labels: v_ref_axis and w_axis must differ")
+    orders = {}
+    for axis, coord in ((w_axis, W), (v_ref_axis, v_ref)):
+        if coord is not None:
+            coord = np.asarray(coord, float)
+            if coord.shape != (unstable.shape[axis],):
+                raise ValueError(
+                    f"stability_labels: coordinate of length {coord.size} for an axis of "
+                    f"length {unstable.shape[axis]}"
+                )
+            orders[axis] = np.argsort(coord, kind="stable")
+    for axis, order in orders.items():
+        unstable, valid = np.take(unstable, order, axis=axis), np.take(valid, order, axis=axis)
+    labels = np.full(unstable.shape, STABLE, np.int8)
+    mask = unstable & valid
+    if mask.any():
+        components, _ = ndimage.label(mask, _plane_structure(mask.ndim, (v_ref_axis, w_axis)))
+        at_w_min = np.take(components, 0, axis=w_axis)
+        primary = np.isin(components, np.unique(at_w_min[at_w_min > 0]))
+        labels[mask] = SU
+        labels[primary] = PU
+    labels[~valid] = NO_DATA
+    for axis, order in orders.items():
+        labels = np.take(labels, np.argsort(order), axis=axis)
+    return labels
+
+
 def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
     """Stable / primary unstable (PU) / secondary unstable (SU) labels (Fig. 9).
 
-    At each ``v_ref``, an unstable point is PU when every point from the smallest
-    ``W`` (W = 0 on the paper's charts) up to it is unstable, and SU when a stable
-    point lies between; a missing point (status != 0) also breaks the connection.
+    A point is unstable where ``stable == 0`` (or, without that output,
+    ``max_real_eig > 0``). Labels by connected components, DESIGN.md §1, as computed by
+    :func:`stability_labels`: PU = an unstable point whose 4-neighbour component of
+    unstable points in the ``(v_ref, W)`` plane reaches the chart's smallest ``W``
+    (W = 0 on the paper's charts), so the primary zone "extends over the whole range of
+    reference velocity" (paper, Fig. 9) even where it lifts off ``W = 0``; SU = an
+    unstable point whose component does not. A missing point (status != 0) is
+    ``NO_DATA`` and never joins a component.
 
     Returns
     -------
     xarray.DataArray
-        int8 over ``("v_ref", "W")`` (W ascending): ``STABLE`` 0, ``PU`` 1, ``SU`` 2,
+        int8 over ``("v_ref", "W")`` (both ascending): ``STABLE`` 0, ``PU`` 1, ``SU`` 2,
         ``NO_DATA`` -1; a CF flag variable (``flag_values``, ``flag_meanings``).
     """
     source = _stability_source(ds)
-    values = plane(ds, source, ("v_ref", "W"), sel, "stability_chart").sortby("W")
+    values = plane(ds, source, ("v_ref", "W"), sel, "stability_chart").sortby(["v_ref", "W"])
     valid = values.notnull()
-    unstable = ((values == 0) if source == "stable" else (values > 0)) & valid
-    primary = np.logical_and.accumulate(unstable.values, axis=1)
-    labels = np.where(
-        ~valid.values, NO_DATA, np.where(primary, PU, np.where(unstable.values, SU, STABLE))
-    )
-    chart = xr.DataArray(
-        labels.astype(np.int8), coords=valid.coords, dims=valid.dims, name="stability"
-    )
+    unstable = (values == 0) if source == "stable" else (values > 0)
+    labels = stability_labels(unstable.values, valid.values, v_ref_axis=0, w_axis=1)
+    chart = xr.DataArray(labels, coords=valid.coords, dims=valid.dims, name="stability")
     chart.attrs = {
         "long_name": "stability of the averaged equilibrium",
         "source_variable": source,

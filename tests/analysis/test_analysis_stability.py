@@ -4,7 +4,7 @@ import pytest
 from scipy.optimize import brentq
 
 from engine import params as P
-from engine.analysis.chart import PU, STABLE, SU, UNKNOWN, stability_chart, stability_labels
+from engine.analysis.chart import stability_chart
 from engine.analysis.stability import (
     averaged_rhs,
     equilibrium,
@@ -12,6 +12,7 @@ from engine.analysis.stability import (
     max_real_eig,
     static_max_real_eig,
 )
+from store.query import NO_DATA, PU, STABLE, SU, stability_labels
 
 PAPER = P.pack()
 CASES = [(0.2, 0.5, 0.1), (0.4, 0.1, 0.01), (0.3, 0.0, 0.1), (0.1, 0.35, 0.01), (0.25, 0.24, 0.01)]
@@ -75,15 +76,18 @@ def test_static_law_eigenvalues():
         assert static_max_real_eig(s) == pytest.approx(np.roots([1, s, 1]).real.max(), abs=1e-12)
 
 
-def test_labels_rule():
+def test_labels_rule_on_the_engine_chart_arrays():
+    """The engine's chart hands ``unstable`` / ``valid`` to the store's one labelling
+    rule (DESIGN.md §1, connected components; its cases: tests/store/
+    test_store_stability_labels.py). Rows W (row 0 = smallest), columns v_ref."""
     lam = np.array([[1.0, -1, 1, np.nan], [1, 1, -1, 1], [-1, 1, 1, 1], [1, 1, 1, 1]])
-    lab = stability_labels(lam, axis=0)
-    assert lab.tolist() == [[PU, STABLE, PU, UNKNOWN], [PU, SU, STABLE, SU],
-                            [STABLE, SU, SU, SU], [SU, SU, SU, SU]]
-    # ordering by a given W coordinate, and along another axis
-    order = [2, 0, 3, 1]
-    assert np.array_equal(stability_labels(lam[order], axis=0, W=np.array(order)), lab[order])
-    assert np.array_equal(stability_labels(lam.T, axis=1), lab.T)
+    unstable, valid = lam > 0, ~np.isnan(lam)
+    lab = stability_labels(unstable, valid, w_axis=0, v_ref_axis=1)
+    assert lab.tolist() == [[PU, STABLE, PU, NO_DATA], [PU, PU, STABLE, PU],
+                            [STABLE, PU, PU, PU], [PU, PU, PU, PU]]
+    c = stability_chart([0.0, 0.5], [0.1, 0.2], PAPER)
+    assert np.array_equal(c["unstable"], c["max_real_eig"] > 0)
+    assert np.array_equal(c["stable"], c["valid"] & ~c["unstable"])
 
 
 def test_undithered_threshold_is_near_the_static_slope_condition():
@@ -102,7 +106,9 @@ V_AX = np.linspace(0.005, 0.295, 59)
 
 
 def _chart(vd):
-    return stability_chart(W_AX, V_AX, P.pack(vd=vd))
+    c = stability_chart(W_AX, V_AX, P.pack(vd=vd))
+    c["labels"] = stability_labels(c["unstable"], c["valid"], w_axis=0, v_ref_axis=1, W=W_AX)
+    return c
 
 
 @pytest.mark.parametrize("vd", [0.1, 0.01])

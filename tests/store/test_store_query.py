@@ -1,8 +1,9 @@
 """Queries on hand-made cubes whose answers are known by construction.
 
-Labels follow DESIGN.md §1: PU = unstable and connected to the smallest W (W = 0 on the
-paper's Fig. 9) through unstable points at the same v_ref; SU = unstable but separated
-from it by a stable point. The store also treats a missing point as a separation.
+Labels follow DESIGN.md §1: PU = an unstable point whose 4-neighbour connected component
+of unstable points in the (v_ref, W) plane contains a point at the smallest W (W = 0 on
+the paper's Fig. 9); SU = an unstable point whose component does not. A missing point is
+no data and never joins a component (more cases: test_store_stability_labels.py).
 """
 
 import numpy as np
@@ -14,13 +15,15 @@ import store
 from store import NO_DATA, PU, STABLE, SU
 
 EXPECTED = np.array(
-    [  # by the rule above, column by column
+    [  # by the rule above: one component reaches W = 0 through the v_ref = 0.8 column;
+        # only the island at v_ref = 0.2, W = 0.6-0.8 is cut off (a column-by-column rule
+        # also calls (W, v_ref) = (0.2, 0.4), (0.4, 0.4), (0.4, 1), (0.6, 1), (1, 1) SU)
         [PU, STABLE, PU, STABLE, PU, PU],
-        [PU, STABLE, PU, SU, PU, NO_DATA],
-        [PU, STABLE, STABLE, SU, PU, SU],
-        [STABLE, STABLE, SU, STABLE, PU, SU],
+        [PU, STABLE, PU, PU, PU, NO_DATA],
+        [PU, STABLE, STABLE, PU, PU, PU],
+        [STABLE, STABLE, SU, STABLE, PU, PU],
         [STABLE, STABLE, SU, STABLE, PU, STABLE],
-        [STABLE, STABLE, STABLE, STABLE, PU, SU],
+        [STABLE, STABLE, STABLE, STABLE, PU, PU],
     ]
 )
 
