@@ -14,7 +14,6 @@ import numpy as np
 from . import params as P
 from .integrators.problem import CTR_EVALS, CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS
 from .kernels import point_kernel, settings_to_cfg
-from .observables import alpha_histogram
 from .scene import ANALYSIS_METHODS, Scene
 from .settings import Settings
 
@@ -29,7 +28,8 @@ class Simulation:
     status : engine.status code.
     steps, rejected, evals : accepted steps, rejected (or retaken) steps, RHS evaluations.
     y_end : final state ``(n,)``.
-    alpha_hist : time shares of alpha in 20 bins of [0, 1], when ``"alpha_hist"`` was asked.
+    alpha_hist : time shares of alpha in 10 equal bins of [0, 1] (stick in the first), when
+        ``"alpha_hist"`` was asked.
     t, y : recorded times ``(k,)`` and states ``(k, n)`` when ``record=True``: every
         ``record_every``-th accepted step end (all stops included when ``record_every=1``),
         or with ``record_dt`` the instants ``j * record_dt >= record_from`` from the
@@ -78,7 +78,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     pk = point_kernel(scene, sampled_record=sampled)
     cfg = settings_to_cfg(settings or Settings(), record_every, record_dt or 0.0, record_from)
     y, obs = np.empty(pk.n), np.empty(pk.obs_size)
-    out = np.empty(len(pk.names))
+    out = np.empty(pk.n_out)
     ctr = np.zeros(CTR_SIZE, dtype=np.int64)
     rec = np.empty((max_records if record else 0, pk.n + 1))
     status = pk.run_point(p, cfg, pk.alloc(), y, obs, out, ctr, rec)
@@ -87,7 +87,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
         outputs={nm: float(out[j]) for j, nm in enumerate(pk.names)}, status=int(status),
         steps=int(ctr[CTR_STEPS]), rejected=int(ctr[CTR_REJECTED]), evals=int(ctr[CTR_EVALS]),
         y_end=y.copy(),
-        alpha_hist=alpha_histogram(obs) if "alpha_hist" in scene.outputs else None,
+        alpha_hist=out[len(pk.names):].copy() if pk.n_out > len(pk.names) else None,
         t=rec[:k, 0].copy() if record else None, y=rec[:k, 1:].copy() if record else None,
         truncated=bool(record and k >= max_records),
     )

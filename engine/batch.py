@@ -14,7 +14,7 @@ import numpy as np
 from . import params as P
 from . import status as S
 from .kernels import block_kernel, point_kernel, settings_to_cfg
-from .observables import API_ONLY
+from .observables import N_HIST
 from .scene import ANALYSIS_METHODS, Scene
 from .settings import Settings
 
@@ -25,7 +25,8 @@ POINT_AXES = ("W", "omega", "v_ref", "vd")
 class BlockResult:
     """Per-point results of one block (all arrays of length n = len(points))."""
 
-    outputs: dict[str, np.ndarray]   # name -> (n,) float64, exactly scene.outputs
+    outputs: dict[str, np.ndarray]   # name -> (n,) float64 ((n, 10) for alpha_hist),
+                                     # exactly scene.outputs
     status: np.ndarray               # (n,) int8, engine.status codes
     steps: np.ndarray                # (n,) int64 accepted steps (0 for analysis paths)
     rejected: np.ndarray             # (n,) int64
@@ -40,10 +41,6 @@ def _check(scene: Scene, points: np.ndarray, p: np.ndarray) -> None:
     if p.shape != (P.N_PARAMS,):
         raise ValueError(f"p: expected the parameter vector of shape ({P.N_PARAMS},) from "
                          f"engine.params.pack, got {p.shape}")
-    api_only = [o for o in scene.outputs if o in API_ONLY]
-    if api_only:
-        raise ValueError(f"scene.outputs: {api_only} exist only in engine.api.simulate, "
-                         "not in a cube")
 
 
 def run_block(scene: Scene, points, p, settings: Settings | None = None) -> BlockResult:
@@ -64,8 +61,9 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
         return _analysis(scene, points, p)
     settings = settings or Settings()
     m = points.shape[0]
-    names = point_kernel(scene).names
-    out = np.full((m, len(names)), np.nan)
+    pk = point_kernel(scene)
+    names = pk.names
+    out = np.full((m, pk.n_out), np.nan)
     status = np.full(m, S.NOT_COMPUTED, dtype=np.int8)
     counters = np.zeros((m, 3), dtype=np.int64)
     kernel = block_kernel(scene)
@@ -74,8 +72,11 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
     wall = time.perf_counter() - t0
     evals = counters[:, 2]
     share = evals / evals.sum() if evals.sum() > 0 else np.full(m, 1.0 / max(m, 1))
+    outputs = {nm: out[:, j].copy() for j, nm in enumerate(names)}
+    if pk.n_out > len(names):
+        outputs["alpha_hist"] = out[:, len(names):len(names) + N_HIST].copy()
     return BlockResult(
-        outputs={nm: out[:, j].copy() for j, nm in enumerate(names)}, status=status,
+        outputs=outputs, status=status,
         steps=counters[:, 0].copy(), rejected=counters[:, 1].copy(), evals=evals.copy(),
         cost_s=wall * share,
     )

@@ -37,7 +37,7 @@ from .integrators.problem import (
     record_sample,
 )
 from .jit import njit
-from .observables import make_observer
+from .observables import N_HIST, make_observer
 from .settings import Settings
 from .systems import make_system
 
@@ -48,6 +48,7 @@ class PointKernel(NamedTuple):
     n: int                 # state size
     obs_size: int          # accumulator length
     names: tuple           # scalar outputs, column order of ``out``
+    n_out: int             # columns of ``out``: the scalars, then N_HIST alpha_hist shares
     alloc: Callable        # alloc() -> work (method scratch)
     run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
 
@@ -122,19 +123,21 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                 return S.NON_FINITE
         return S.OK
 
-    return PointKernel(system.n, observer.size, observer.names, stepper.alloc, run_point)
+    n_out = len(observer.names) + (N_HIST if observer.hist else 0)
+    return PointKernel(system.n, observer.size, observer.names, n_out, stepper.alloc,
+                       run_point)
 
 
 @cache
 def block_kernel(scene) -> Callable:
     """njit ``run(points, p, cfg, out, status, counters)`` over a block of grid points.
 
-    ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out`` ``(m, k)``
-    in the order of the scene's scalar outputs; ``status`` ``(m,)`` int8; ``counters``
+    ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out``
+    ``(m, n_out)``: the scene's scalar outputs in order, then the alpha_hist shares; ``status`` ``(m,)`` int8; ``counters``
     ``(m, 3)`` int64: accepted steps, rejected steps, evaluations.
     """
     pk = point_kernel(scene)
-    n, size, k = pk.n, pk.obs_size, len(pk.names)
+    n, size, k = pk.n, pk.obs_size, pk.n_out
     alloc, run_point = pk.alloc, pk.run_point
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 

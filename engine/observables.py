@@ -15,17 +15,36 @@ Definitions (``T = t_end - t_transient``):
   window holds fewer than two period boundaries.
 - ``F_mean``: ``(Q(t_end) - Q(t_transient)) / T`` with ``Q`` the quadrature state ``dQ = F``.
 - ``stick_fraction`` / ``presliding_fraction`` / ``slip_fraction``: time shares of the
-  elasto-plastic phases ``alpha == 0``, ``0 < alpha < 1``, ``alpha == 1`` (Eq. 2.7). For laws
-  without alpha, stick means ``|u| < p[STICK_BAND]`` (the Karnopp band of the static laws),
-  slip otherwise, pre-sliding is 0. The phase of a step is the phase at its midpoint (dense
-  output): exact when every phase change falls on a step end, which adaptive methods ensure
-  by stepping onto the kink events; a fixed-step method errs by at most one step per change.
+  elasto-plastic phases ``alpha == 0``, ``0 < alpha < 1``, ``alpha == 1`` (Eq. 2.7).
+  **Sliding** is ``|z| >= (1 - p[SLIP_GAP]) z_ss`` with ``sgn z = sgn u``: a sliding bristle
+  relaxes onto ``z_ss`` exponentially (rate ``sigma0 |u| / g``), so exact ``alpha == 1``
+  holds there only to round-off and its share would change with every tolerance (measured:
+  slip 0.081 / 0.096 / 0.350 at rtol 1e-5 / 1e-8 / 1e-10 when judged by ``alpha == 1.0`` at
+  step midpoints). The gap makes the share a well-posed functional of the trajectory; the
+  default 1e-9 is where ``alpha`` rounds to 1.0 in double precision (lam = 0.8), so it agrees
+  with that reading on an exact trajectory (DESIGN.md §1 reference shares). The share still
+  depends on the gap (about 0.003 per decade on the Sec. 7 slider: sliding ends where
+  ``z_ss`` starts to rise, by an exponentially small amount), so it needs the state to
+  about ``gap * z_ss``: the accuracy levels tighten the tolerance for it (sweeps.accuracy).
+  **Bookkeeping**: the phases depend on the state only through the signed ratio
+  ``rho = sgn(u) z / z_ss(u)`` (stick: ``rho <= lam``; sliding: ``rho >= 1 - gap``), which
+  is smooth inside a step when the step does not cross ``u = 0`` (adaptive methods land on
+  every kink, so it never does; ``sgn(u)`` is taken at the midpoint). ``rho`` is interpolated
+  by the quadratic through the step's start, midpoint (dense output) and end, and each phase
+  gets the measure of the part of the step where the quadratic lies in its band. Phase
+  boundaries inside a step are thus located to O(h^3), not rounded to a whole step. For laws
+  without alpha (lugre: stick means ``|u| < p[STICK_BAND]``; static laws: the Karnopp band),
+  slip otherwise, pre-sliding 0, judged at the step midpoint.
+- ``near_slip_fraction``: the share of time with ``alpha >= p[ALPHA_NEAR]`` (default 0.9), from
+  the same quadratic; ``alpha`` crosses 0.9 transversally, so unlike ``slip_fraction`` it is
+  well conditioned at any tolerance. Laws without alpha: the slip share.
 - ``long_stick_fraction`` / ``max_stick``: a *sticking run* is an uninterrupted stretch of
-  steps in the stick phase (clipped to the window); the paper's "long-duration stick"
-  (Sec. 7, never defined there) is a run longer than ``p[LONG_STICK]``.
+  steps in the stick phase (judged at the midpoint; clipped to the window); the paper's
+  "long-duration stick" (Sec. 7, never defined there) is a run longer than ``p[LONG_STICK]``.
   ``long_stick_fraction`` = total time in long runs / T, ``max_stick`` = the longest run.
-- ``alpha_hist`` (API only, not a cube variable): time-weighted histogram of alpha over
-  :data:`N_HIST` equal bins of [0, 1] (the paper's Fig. 12 histograms of uniform samples).
+- ``alpha_hist``: the time shares of alpha in :data:`N_HIST` equal bins of [0, 1] (the paper's
+  Figs. 12 and 17 histograms; stick counts in the first bin), a vector output (cube
+  dimension ``alpha_bin``).
 """
 from __future__ import annotations
 
@@ -39,17 +58,22 @@ from . import params as P
 from .dither import CODE, NONE
 from .friction.elastoplastic import PRESLIDE, SLIDE, STICK
 from .jit import njit
-from .outputs import SIMULATE
+from .outputs import SIMULATE, VECTOR
+from .systems.laws import make_g
 
 O_ON, O_T0, O_X0, O_Q0 = 0, 1, 2, 3
 O_T_STICK, O_T_PRE, O_T_SLIP = 4, 5, 6
 O_RUN, O_LONG, O_MAX = 7, 8, 9
 O_VMIN, O_VMAX, O_XPREV, O_TPREV = 10, 11, 12, 13
-O_HIST = 14
-N_HIST = 20
-API_ONLY = ("alpha_hist",)
+O_T_NEAR = 14
+O_R_SLIP, O_R_NEAR = 15, 16     # the rho thresholds of sliding and of alpha_near
+O_R_EDGE = 17                   # rho at the inner alpha bin edges 1/N_HIST ... (N_HIST-1)/N_HIST
+N_HIST = VECTOR["alpha_hist"][1]
+O_HIST = O_R_EDGE + N_HIST - 1
+O_SIZE = O_HIST + N_HIST
+SCALARS = tuple(nm for nm in SIMULATE if nm not in VECTOR)
 PHASE_OUTPUTS = ("stick_fraction", "presliding_fraction", "slip_fraction",
-                 "long_stick_fraction", "max_stick", "alpha_hist")
+                 "long_stick_fraction", "max_stick", "near_slip_fraction", "alpha_hist")
 
 
 class Observer(NamedTuple):
@@ -57,6 +81,7 @@ class Observer(NamedTuple):
 
     size: int              # len(obs)
     names: tuple           # scalar outputs written by finish, in order
+    hist: bool             # finish appends the N_HIST alpha_hist shares after the scalars
     needs_mid: bool        # observe uses ymid
     period_stops: bool     # the driver must stop on dither period boundaries
     init: Callable         # init(obs)
@@ -68,10 +93,10 @@ class Observer(NamedTuple):
 
 def check_outputs(outputs) -> None:
     """Raise ValueError naming any output the simulate path does not know."""
-    known = tuple(SIMULATE) + API_ONLY
-    bad = [o for o in outputs if o not in known]
+    bad = [o for o in outputs if o not in SIMULATE]
     if bad:
-        raise ValueError(f"outputs: unknown simulate observable(s) {bad}; known: {known}")
+        raise ValueError(f"outputs: unknown simulate observable(s) {bad}; "
+                         f"known: {tuple(SIMULATE)}")
 
 
 @njit(inline="always", error_model="numpy")
@@ -87,20 +112,67 @@ def make_observer(scene, system) -> Observer:
     """Compile the hooks for ``scene.outputs`` on ``system`` (engine.systems.System)."""
     outs = tuple(scene.outputs)
     check_outputs(outs)
-    names = tuple(o for o in outs if o not in API_ONLY)
+    names = tuple(o for o in outs if o not in VECTOR)
     phases = any(o in PHASE_OUTPUTS for o in outs)
     hist = "alpha_hist" in outs
     undithered = CODE[scene.dither] == NONE
     p2p = "v_slow_p2p" in outs
     period_stops = p2p and not undithered
-    size = O_HIST + (N_HIST if hist else 0)
-    hooks = _make_hooks(system, phases, hist, p2p and undithered, period_stops)
-    finish = _make_finish(system, names)
-    return Observer(size, names, phases, period_stops, hooks[0], hooks[1], hooks[2],
-                    hooks[3], finish)
+    elasto = scene.friction == "elastoplastic"
+    hooks = _make_hooks(system, phases, hist, p2p and undithered, period_stops, elasto,
+                        make_g(scene.stribeck))
+    finish = _make_finish(system, names, hist)
+    return Observer(O_SIZE, names, hist, phases, period_stops, *hooks, finish)
 
 
-def _make_observe(interface, velocity, phases, hist, p2p_steps):
+@njit(error_model="numpy")
+def rho_of_alpha(a, lam):
+    """The ratio ``rho = |z| / z_ss`` at which Eq. 2.7 gives ``alpha = a`` (0 < a < 1)."""
+    return 0.5 * (1.0 + lam) + (1.0 - lam) / np.pi * math.asin(2.0 * a - 1.0)
+
+
+@njit(error_model="numpy")
+def share_above(r0, rm, r1, thr):
+    """Measure of ``{s in [0, 1]: q(s) >= thr}`` for the quadratic ``q`` through
+    ``(0, r0)``, ``(1/2, rm)``, ``(1, r1)``."""
+    lo = min(r0, rm, r1)
+    a = 2.0 * (r0 + r1) - 4.0 * rm
+    b = 4.0 * rm - 3.0 * r0 - r1
+    c = r0 - thr
+    if lo >= thr and (a <= 0.0 or not 0.0 < -b / (2.0 * a) < 1.0
+                      or c - b * b / (4.0 * a) >= 0.0):
+        return 1.0
+    if max(r0, rm, r1) < thr and (a >= 0.0 or not 0.0 < -b / (2.0 * a) < 1.0
+                                  or c - b * b / (4.0 * a) < 0.0):
+        return 0.0
+    # roots of q - thr in (0, 1), at most two, in increasing order
+    s1, s2 = 2.0, 2.0
+    if abs(a) <= 1e-12 * (abs(b) + abs(c)):
+        if b != 0.0:
+            s1 = -c / b
+    else:
+        disc = b * b - 4.0 * a * c
+        if disc >= 0.0:
+            qq = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+            x1 = qq / a
+            x2 = c / qq if qq != 0.0 else x1
+            s1, s2 = min(x1, x2), max(x1, x2)
+    if not 0.0 < s1 < 1.0:
+        s1, s2 = s2, 2.0
+    if not 0.0 < s2 < 1.0:
+        s2 = 2.0
+    total, left = 0.0, 0.0
+    for right in (s1, s2, 1.0):
+        if right > 1.0:
+            continue
+        mid = 0.5 * (left + right)
+        if (a * mid + b) * mid + c >= 0.0:
+            total += right - left
+        left = right
+    return total
+
+
+def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto):
     """The per-step hook: phase bookkeeping and/or step-end velocity extremes."""
     if not (phases or p2p_steps):
         # nothing is reduced per step: an empty hook the compiler removes (~6 % of a step)
@@ -110,12 +182,24 @@ def _make_observe(interface, velocity, phases, hist, p2p_steps):
         return nothing
 
     @njit(inline="always", error_model="numpy")
+    def rho(t, y, p, sq, su):
+        u, _, _ = interface(t, y, p, sq)
+        return su * y[z_index] * p[P.SIGMA0] / g(u, p)
+
+    @njit(inline="always", error_model="numpy")
     def observe(t0, y0, t1, y1, ymid, p, sq, obs):
         if obs[O_ON] == 0.0:
             return
         if phases:
-            _, _, a = interface(0.5 * (t0 + t1), ymid, p, sq)
-            _add_phase(obs, t0, t1, a, p[P.LONG_STICK], hist)
+            um, _, am = interface(0.5 * (t0 + t1), ymid, p, sq)
+            if elasto and am != 0.0:
+                su = 1.0 if um > 0.0 else -1.0
+                _add_elasto(obs, t0, t1, rho(t0, y0, p, sq, su),
+                            rho(0.5 * (t0 + t1), ymid, p, sq, su), rho(t1, y1, p, sq, su),
+                            p[P.LAM], hist)
+                _run_bookkeeping(obs, t0, False, p[P.LONG_STICK])
+            else:
+                _add_phase(obs, t0, t1, am, p[P.LONG_STICK], hist)
         if p2p_steps:
             v = velocity(t1, y1, p, sq)
             obs[O_VMIN] = min(obs[O_VMIN], v)
@@ -123,7 +207,7 @@ def _make_observe(interface, velocity, phases, hist, p2p_steps):
     return observe
 
 
-def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
+def _make_hooks(system, phases, hist, p2p_steps, p2p_periods, elasto, g):
     interface, position, velocity, qf = (system.interface, system.position,
                                          system.velocity, system.qf)
 
@@ -146,8 +230,15 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
             v = velocity(t, y, p, sq)
             obs[O_VMIN] = v
             obs[O_VMAX] = v
+        if phases and elasto:
+            lam = p[P.LAM]
+            obs[O_R_SLIP] = 1.0 - p[P.SLIP_GAP]
+            obs[O_R_NEAR] = rho_of_alpha(min(max(p[P.ALPHA_NEAR], 0.0), 1.0), lam)
+            for k in range(1, N_HIST):
+                obs[O_R_EDGE + k - 1] = rho_of_alpha(k / N_HIST, lam)
 
-    observe = _make_observe(interface, velocity, phases, hist, p2p_steps)
+    observe = _make_observe(interface, velocity, system.z_index, g, phases, hist, p2p_steps,
+                            elasto)
 
     @njit(inline="always", error_model="numpy")
     def stop(t, y, p, is_period, obs):
@@ -165,18 +256,45 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods):
 
 
 @njit(error_model="numpy")
+def _add_elasto(obs, t0, t1, r0, rm, r1, lam, hist):
+    """Book the step ``[t0, t1]`` of a non-sticking midpoint by the quadratic of ``rho``
+    (module docstring): stick below ``lam``, sliding above ``1 - gap``."""
+    h = t1 - t0
+    moving = share_above(r0, rm, r1, lam)
+    slip = share_above(r0, rm, r1, obs[O_R_SLIP])
+    obs[O_T_STICK] += h * (1.0 - moving)
+    obs[O_T_SLIP] += h * slip
+    obs[O_T_PRE] += h * max(moving - slip, 0.0)
+    obs[O_T_NEAR] += h * share_above(r0, rm, r1, obs[O_R_NEAR])
+    if hist:
+        prev = 1.0
+        for k in range(N_HIST):
+            above = share_above(r0, rm, r1, obs[O_R_EDGE + k]) if k < N_HIST - 1 else 0.0
+            obs[O_HIST + k] += h * max(prev - above, 0.0)
+            prev = above
+
+
+@njit(error_model="numpy")
 def _add_phase(obs, t0, t1, a, long_stick, hist):
-    """Book the step [t0, t1] to the phase of alpha ``a`` and update sticking runs."""
+    """Book the step [t0, t1] to the phase of its midpoint alpha ``a`` (sticking steps of
+    every law; every step of the laws without alpha) and update sticking runs."""
     h = t1 - t0
     ph = _phase(a)
     obs[O_T_STICK + ph] += h
-    if ph == STICK:
+    if a >= 1.0:
+        obs[O_T_NEAR] += h
+    _run_bookkeeping(obs, t0, ph == STICK, long_stick)
+    if hist:
+        obs[O_HIST + min(int(a * N_HIST), N_HIST - 1)] += h
+
+
+@njit(error_model="numpy")
+def _run_bookkeeping(obs, t0, sticking, long_stick):
+    if sticking:
         if math.isnan(obs[O_RUN]):
             obs[O_RUN] = t0
     elif not math.isnan(obs[O_RUN]):
         _close_run(obs, t0, long_stick)
-    if hist:
-        obs[O_HIST + min(int(a * N_HIST), N_HIST - 1)] += h
 
 
 @njit(error_model="numpy")
@@ -188,9 +306,10 @@ def _close_run(obs, t, long_stick):
     obs[O_RUN] = np.nan
 
 
-def _make_finish(system, names):
-    codes = np.array([tuple(SIMULATE).index(nm) for nm in names], dtype=np.int64)
+def _make_finish(system, names, hist):
+    codes = np.array([SCALARS.index(nm) for nm in names], dtype=np.int64)
     position, qf = system.position, system.qf
+    k = len(names)
 
     @njit(inline="always", error_model="numpy")
     def finish(t, y, p, obs, out):
@@ -199,12 +318,15 @@ def _make_finish(system, names):
         span = t - obs[O_T0]
         for j in range(codes.size):
             out[j] = _value(codes[j], t, y, p, obs, span, position(t, y, p), qf)
+        if hist:
+            for j in range(N_HIST):
+                out[k + j] = obs[O_HIST + j] / span
     return finish
 
 
 @njit(error_model="numpy")
 def _value(code, t, y, p, obs, span, x, qf):
-    # code = index in engine.outputs.SIMULATE
+    # code = index in SCALARS (engine.outputs.SIMULATE without the vector outputs)
     if code == 0:
         return (x - obs[O_X0]) / span
     if code == 1:
@@ -215,11 +337,6 @@ def _value(code, t, y, p, obs, span, x, qf):
         return obs[O_T_STICK + code - 3] / span
     if code == 6:
         return obs[O_LONG] / span
-    return obs[O_MAX]
-
-
-def alpha_histogram(obs: np.ndarray) -> np.ndarray:
-    """Time shares of alpha in :data:`N_HIST` equal bins of [0, 1] (sums to 1)."""
-    h = np.asarray(obs[O_HIST:O_HIST + N_HIST], dtype=float)
-    total = h.sum()
-    return h / total if total > 0 else h
+    if code == 7:
+        return obs[O_MAX]
+    return obs[O_T_NEAR] / span

@@ -11,10 +11,14 @@ SIMULATE = {
     "F_mean": ("mean friction force after the transient", "1"),
     "stick_fraction": ("fraction of time sticking (alpha == 0)", "1"),
     "presliding_fraction": ("fraction of time pre-sliding (0 < alpha < 1)", "1"),
-    "slip_fraction": ("fraction of time sliding (alpha == 1)", "1"),
+    "slip_fraction": ("fraction of time sliding (alpha == 1: |z| >= (1 - slip_gap) z_ss)", "1"),
     "long_stick_fraction": ("fraction of time in sticking runs longer than long_stick", "1"),
     "max_stick": ("longest uninterrupted sticking run", "tau"),
+    "near_slip_fraction": ("fraction of time with alpha >= alpha_near", "1"),
+    "alpha_hist": ("fraction of time with alpha in each of 10 equal bins of [0, 1]", "1"),
 }
+# outputs with an extra dimension: name -> (dimension, size)
+VECTOR = {"alpha_hist": ("alpha_bin", 10)}
 AVERAGED = {
     "F_eff": ("averaged effective friction at slip velocity v_ref", "1"),
     "max_real_eig": ("largest real part of the averaged Jacobian's eigenvalues", "1/tau"),

@@ -39,12 +39,15 @@ STICK_BAND = 18   # |u| below this counts as stuck for laws without alpha (Karno
 E0 = 19
 V0 = 20
 Z0 = 21
-N_PARAMS = 22
+# --- elasto-plastic phase thresholds (engine.observables) ----------------------
+SLIP_GAP = 22     # sliding: |z| >= (1 - slip_gap) z_ss  (alpha == 1 up to round-off)
+ALPHA_NEAR = 23   # near_slip_fraction: share of time with alpha >= alpha_near
+N_PARAMS = 24
 
 NAMES = (
     "sigma0", "sigma1", "sigma2", "vs", "vd", "fc", "fs", "delta", "delta_d", "lam",
     "slow_a", "slow_omega", "W", "omega", "v_ref", "t_end", "t_transient",
-    "long_stick", "stick_band", "e0", "v0", "z0",
+    "long_stick", "stick_band", "e0", "v0", "z0", "slip_gap", "alpha_near",
 )
 INDEX = {name: i for i, name in enumerate(NAMES)}
 
@@ -60,6 +63,14 @@ PAPER_DEFAULTS = {
     "long_stick": 0.5,
     "stick_band": 1e-6,
     "e0": 0.0, "v0": 0.0, "z0": 0.0,
+    # Sliding (alpha == 1) is |z| >= z_ss, but a sliding bristle relaxes onto z_ss
+    # exponentially, so alpha == 1 holds there only to round-off and a share of exact
+    # alpha == 1 is ill-posed (engine.observables). Sliding is |z| within slip_gap
+    # (relative) of z_ss; 1e-9 is where alpha rounds to 1.0 in double precision for
+    # lam = 0.8 (1 - alpha ~ 31 gap^2 < 2^-53), the reading of DESIGN.md's reference shares.
+    "slip_gap": 1e-9,
+    # near_slip_fraction: alpha >= 0.9 (crossed transversally: well conditioned)
+    "alpha_near": 0.9,
 }
 
 #: Sec. 3 / Fig. 1 contact model, SI units (delta = 1 there).

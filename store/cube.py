@@ -125,7 +125,10 @@ def empty_cube(
         list for an axis that is not swept). Any order is kept as given; queries
         and maps sort where they need to.
     variables
-        Output name -> ``(long_name, units)``, e.g. ``engine.outputs.SIMULATE``.
+        Output name -> ``(long_name, units)``, e.g. ``engine.outputs.SIMULATE``, or
+        ``(long_name, units, (dim, size))`` for an output with one extra trailing
+        dimension (e.g. ``alpha_hist`` over ``alpha_bin``: 10 equal bins of [0, 1], whose
+        centres become the coordinate).
     attrs
         Global attributes (see ``store.attrs``: ``sweep_id``, ``name``, ``spec``,
         ``engine_settings`` ...). Non-scalars are stored as canonical JSON strings;
@@ -148,17 +151,31 @@ def empty_cube(
             )
         if not (
             isinstance(meta, (tuple, list))
-            and len(meta) == 2
-            and all(isinstance(m, str) for m in meta)
+            and len(meta) in (2, 3)
+            and all(isinstance(m, str) for m in meta[:2])
         ):
             raise ValueError(
                 f"variables[{name!r}] must be (long_name, units) strings, got {meta!r}"
             )
+        dims, full = AXES, shape
+        if len(meta) == 3:
+            dim, size = meta[2]
+            dims, full = AXES + (dim,), shape + (int(size),)
+            axes[dim] = _bin_coord(dim, int(size))
         data[name] = xr.Variable(
-            AXES, np.full(shape, np.nan), {"long_name": meta[0], "units": meta[1]}
+            dims, np.full(full, np.nan), {"long_name": meta[0], "units": meta[1]}
         )
     data.update(_bookkeeping(shape))
     return xr.Dataset(data, coords=axes, attrs=_global_attrs(attrs))
+
+
+def _bin_coord(dim: str, size: int) -> xr.Variable:
+    """Centres of ``size`` equal bins of [0, 1], with their CF cell bounds described."""
+    centres = (np.arange(size) + 0.5) / size
+    return xr.Variable(dim, centres, {
+        "long_name": f"centre of the {dim} (equal bins of [0, 1])", "units": "1",
+        "comment": f"bin k covers [k/{size}, (k+1)/{size}); the last bin includes 1",
+    })
 
 
 def output_names(ds: xr.Dataset) -> list[str]:
@@ -221,8 +238,10 @@ def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarra
     columns = {**values, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
     columns = {k: np.asarray(v) for k, v in columns.items()}
     for name, col in columns.items():
-        if col.shape != (n,):
-            raise ValueError(f"fill: {name} has shape {col.shape}, expected ({n},) like flat_index")
+        expected = (n,) + tuple(ds[name].shape[len(AXES):])
+        if col.shape != expected:
+            raise ValueError(f"fill: {name} has shape {col.shape}, expected {expected} "
+                             "like flat_index")
     bad = ~np.isin(columns["status"], np.arange(len(STATUS_MEANINGS)))
     if bad.any():
         raise ValueError(
@@ -254,19 +273,22 @@ def fill(
     columns = _columns(ds, idx.size, values, status, cost_s, steps, evals)
     for name, col in columns.items():
         var = ds.variables[name]
-        var.load()  # numpy-backed from here on, so np.put writes into the dataset itself
-        np.put(var.data, idx, col)
+        var.load()  # numpy-backed from here on, so writes go into the dataset itself
+        flat = var.data.reshape((-1,) + var.shape[len(AXES):])   # a view: points first
+        flat[idx] = col
 
 
 def _check_layout(ds: xr.Dataset, where: str) -> None:
-    if set(ds.dims) != set(AXES) or "status" not in ds or any(a not in ds.coords for a in AXES):
+    if not set(AXES) <= set(ds.dims) or "status" not in ds \
+            or any(a not in ds.coords for a in AXES):
         raise ValueError(
             f"{where}: not a ditherlab cube: dims {tuple(ds.dims)} (expected {AXES}), "
             f"variables {list(ds.data_vars)} (expected 'status' among them)"
         )
     for name, var in ds.data_vars.items():
-        if var.dims != AXES:
-            raise ValueError(f"{where}: variable {name!r} has dims {var.dims}, expected {AXES}")
+        if var.dims[:len(AXES)] != AXES or len(var.dims) > len(AXES) + 1:
+            raise ValueError(f"{where}: variable {name!r} has dims {var.dims}, expected {AXES} "
+                             "(and at most one extra trailing dimension)")
 
 
 def _encoding(ds: xr.Dataset) -> dict[str, dict]:

@@ -75,9 +75,12 @@ def _checked(payload: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         )
     out = {k: np.asarray(v, dtype=FIELDS.get(k, np.float64)) for k, v in payload.items()}
     n = out["index"].shape
-    bad = {k: v.shape for k, v in out.items() if v.ndim != 1 or v.shape != n}
+    # one row per point; an output may carry one extra trailing axis (alpha_hist)
+    bad = {k: v.shape for k, v in out.items()
+           if v.shape[:1] != n or v.ndim > (1 if k in FIELDS else 2)}
     if bad:
-        raise ValueError(f"journal payload arrays must all be 1-D of index's shape {n}; got {bad}")
+        raise ValueError(f"journal payload arrays must have index's length {n[0]} first "
+                         f"(1-D, or 2-D for a vector output); got {bad}")
     return out
 
 

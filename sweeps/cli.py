@@ -92,7 +92,9 @@ def cmd_status(args) -> int:
         if row["state"] == store.catalogue.STALLED:
             print(f"{'':>16}the submitting process ({row['owner']}) is gone; submit the spec "
                   "again to resume (finished blocks are kept)")
-        _print_error_estimate(store.open_cube(cube))
+        ds = store.open_cube(cube)
+        _print_error_estimate(ds)
+        _warn_accuracy(ds)
         return 0
     rows = cat.list()
     if not rows:
@@ -110,10 +112,22 @@ def _print_error_estimate(ds) -> None:
     if not raw:
         return
     est = json.loads(raw) if isinstance(raw, str) else raw
+    if "change" not in est:   # written before the gate existed
+        print(f"{'error est.':>14}: (an old estimate without promises; submit again)")
+        return
     print(f"{'error est.':>14}: change against {est['compared_with']} on "
-          f"{est['sample_points']} sample points")
-    for name, rel in est["max_rel_change"].items():
-        print(f"{'':>16}{name:<22} abs {est['max_abs_change'][name]:9.2e}  rel {rel:9.2e}")
+          f"{est['sample_points']} sample points (fractions absolute, others relative)")
+    for name, change in est["change"].items():
+        flag = "ok" if change <= est["promise"][name] else "OVER PROMISE"
+        print(f"{'':>16}{name:<22} {change:9.2e}  promise {est['promise'][name]:7.0e}  {flag}")
+
+
+def _warn_accuracy(ds) -> None:
+    """One stderr line per accuracy warning recorded in the cube (sweeps.errors)."""
+    from .errors import warnings_of
+
+    for w in warnings_of(ds):
+        print(f"ditherlab: warning: {w}", file=sys.stderr)
 
 
 def cmd_query(args) -> int:
@@ -122,6 +136,7 @@ def cmd_query(args) -> int:
     root = store_root(args.store)
     _, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    _warn_accuracy(ds)
     try:
         df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
     except ValueError as exc:
@@ -141,6 +156,7 @@ def cmd_map(args) -> int:
     root = store_root(args.store)
     _, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    _warn_accuracy(ds)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]
     try:

@@ -14,6 +14,9 @@ def resolve_outputs(method: str, requested: list[str] | None) -> tuple[str, ...]
     return tuple(requested) if requested else allowed_outputs(method)
 
 
-def output_attrs(method: str, name: str) -> tuple[str, str]:
-    """(long_name, units) of an output."""
-    return engine_outputs.describe(method, name)
+def output_attrs(method: str, name: str) -> tuple:
+    """(long_name, units) of an output, plus ``(dim, size)`` for a vector output
+    (``alpha_hist`` over ``alpha_bin``), as ``store.empty_cube`` takes them."""
+    meta = engine_outputs.describe(method, name)
+    extra = engine_outputs.VECTOR.get(name) if method == "simulate" else None
+    return (*meta, extra) if extra else meta

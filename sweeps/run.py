@@ -22,12 +22,13 @@ import store
 from engine import params as P
 from engine import status as S
 
-from . import history
+from . import errors, history
 from .outputs import output_attrs
 from .plan import Plan
 from .version import __version__
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running
+ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (sweeps.errors)
 COUNTERS = ("status", "cost_s", "steps", "evals")
 
 log = logging.getLogger("ditherlab")
@@ -147,6 +148,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     sweep = store.SweepDir(store_root, plan.sweep_id)
     journal = store.Journal(sweep.journal)
     cube = store.rebuild(empty_cube(plan), journal)  # what earlier runs finished
+    attach_saved_estimate(sweep, cube)
     todo = blocks_to_run(plan, cube)
     catalogue = store.Catalogue(store_root)
     if not todo and sweep.cube.exists():
@@ -210,24 +212,50 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
             sink(futures[future], future.result())
             bar.update(1)
         timings["compute_s"] = time.perf_counter() - t
-        if todo and plan.path == "simulate":
+        complete = not (sink.cube["status"].values == S.NOT_COMPUTED).any()
+        if todo and plan.path == "simulate" and complete:
             t = time.perf_counter()
-            sink.cube.attrs["error_estimate"] = json.dumps(_error_estimate(plan, client,
-                                                                           sink.cube))
+            estimate = _error_estimate(plan, client, sink.cube)
+            errors.attach(sink.cube, estimate)
+            _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
             timings["error_estimate_s"] = time.perf_counter() - t
     bar.close()
 
 
 def _error_estimate(plan: Plan, client, cube) -> dict:
-    """Re-run a sample one accuracy level finer on the cluster (sweeps.errors)."""
-    from . import errors
-
+    """Re-run the error sample one accuracy level finer on the cluster, one task per
+    point (sweeps.errors), and compare."""
     finer = errors.finer_numerics(plan)
     index, pts = errors.sample(plan)
     scene = plan.scene.with_(method=finer.integrator)
-    result = client.submit(compute_block, scene, pts, plan.params, finer.settings,
-                           pure=False).result()
+    futures = [client.submit(compute_block, scene, pts[i:i + 1], plan.params, finer.settings,
+                             pure=False) for i in range(len(pts))]
+    parts = client.gather(futures)
+    result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
+              if k != "error"}
     return errors.compare(plan, cube, index, result, finer.label)
+
+
+def _write_json(path: Path, data: dict) -> None:
+    """Write ``data`` as JSON atomically (temporary name, fsync, rename)."""
+    import os
+
+    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
+    with open(tmp, "w") as f:
+        json.dump(data, f)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def attach_saved_estimate(sweep, cube) -> bool:
+    """Put the sweep's saved error estimate (if any) into ``cube``; True when there was one."""
+    path = sweep.root / ESTIMATE_FILE
+    try:
+        errors.attach(cube, json.loads(path.read_text()))
+    except (OSError, ValueError, KeyError):
+        return False
+    return True
 
 
 def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,

@@ -110,6 +110,8 @@ class Params(_Strict):
     slow_force: SlowForce = SlowForce()
     long_stick: PositiveFloat | None = None
     stick_band: PositiveFloat | None = None
+    slip_gap: Annotated[float, Field(gt=0.0, lt=0.1)] | None = None     # engine.observables
+    alpha_near: Annotated[float, Field(gt=0.0, lt=1.0)] | None = None   # near_slip_fraction
     e0: float = 0.0
     v0: float = 0.0
     z0: float = 0.0

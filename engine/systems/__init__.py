@@ -28,6 +28,7 @@ class System(NamedTuple):
     qf: int               # index of the running integral of F, -1 if absent
     scales: Callable      # scales(p, out): natural scale of each error-controlled component
     event_jumps: bool     # the events mark jumps of rhs (static laws' Karnopp band edges)
+    z_index: int          # index of the bristle deflection z in y
 
 
 def make_system(scene) -> System:
@@ -41,6 +42,7 @@ def make_system(scene) -> System:
         interface=mod.make_interface(scene), position=mod.make_position(scene),
         velocity=mod.make_velocity(scene), init=init, qf=mod.quadrature_index(scene),
         scales=mod.make_scales(scene), event_jumps=scene.friction in STATIC_LAWS,
+        z_index=mod.Z,
     )
 
 

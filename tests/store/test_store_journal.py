@@ -110,7 +110,7 @@ def test_rebuild_equals_filling_directly(cube, tmp_path):
             r"journal payload lacks \['status', 'cost_s', 'steps', 'evals'\]",
         ),
         ({**{k: np.zeros(2) for k in FIELDS}, "F_mean": np.zeros(3)}, r"'F_mean': \(3,\)"),
-        ({**{k: np.zeros((2, 2)) for k in FIELDS}}, r"must all be 1-D"),
+        ({**{k: np.zeros((2, 2)) for k in FIELDS}}, r"must have index.s length 2 first"),
     ],
 )
 def test_write_refuses_bad_payloads(tmp_path, payload, message):
