@@ -58,8 +58,10 @@ QUENCH_RATIO = 0.1         # Fig. 10 "quenched" when v_slow_p2p < QUENCH_RATIO *
 FIG10_W = (0.0, 0.2, 0.3, 0.4, 0.5, 0.6)   # Fig. 10 (a)-(f)
 
 ALL_SIM = ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "presliding_fraction",
-           "slip_fraction", "long_stick_fraction", "max_stick"]
-FRACTIONS = ("stick_fraction", "presliding_fraction", "slip_fraction", "long_stick_fraction")
+           "slip_fraction", "long_stick_fraction", "max_stick", "near_slip_fraction",
+           "alpha_hist"]
+FRACTIONS = ("stick_fraction", "presliding_fraction", "slip_fraction", "long_stick_fraction",
+             "near_slip_fraction", "alpha_hist")
 
 
 def _spec(name, friction, dither, W, omega, v_ref, t_transient, params=None):
@@ -82,13 +84,27 @@ SCENES = {
         "spec": _spec("sec7", "elastoplastic", "sine-velocity", 1.5, 100.0, 0.1, 20.0,
                       {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}}),
         "queried": ("v_slow_p2p", "F_mean", "v_mean", "stick_fraction", "presliding_fraction",
-                    "max_stick"),
+                    "max_stick", "slip_fraction", "near_slip_fraction", "long_stick_fraction",
+                    "alpha_hist"),
         # DP5 at rtol 1e-12 stalls here (zero-length steps on an alpha kink at tau ~ 1.92):
         # shown with the service's default step budget
         "refs": [("dopri5", {"rtol": 1e-11, "atol": 1e-14}),
                  ("rodas4", {"rtol": 1e-9, "atol": 1e-12}),
                  ("rk4", {"steps_per_period": 4096}),
                  ("dopri5", {**DP5_REF[1], "max_steps": Settings().max_steps})]},
+    # Sec. 7 slider without dither from rest over [0, 100] (DESIGN.md §1's reference shares
+    # stick 0.527, pre-sliding 0.123, slip 0.350): alpha reaches 1, so the sliding share
+    # hinges on the sliding gap (engine.observables); scripts/reference_phases.py checks
+    # the reference independently (scipy DOP853 with restarts at every kink)
+    "ep_nodither": {
+        "spec": _spec("ep_nodither", "elastoplastic", "sine-velocity", 0.0, 1000.0, 0.1, 0.0,
+                      {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}}),
+        "queried": ("stick_fraction", "presliding_fraction", "slip_fraction",
+                    "near_slip_fraction", "long_stick_fraction", "max_stick", "alpha_hist",
+                    "v_slow_p2p", "F_mean", "v_mean"),
+        "refs": [("dopri5", {"rtol": 1e-13, "atol": 1e-16}),
+                 ("dopri5", {"rtol": 1e-12, "atol": 1e-15}),
+                 ("rodas4", {"rtol": 1e-10, "atol": 1e-13})]},
     # Fig. 10(a): the undithered stick-slip cycle (W = 0: the plan compiles dither "none").
     "nodither": {
         "spec": _spec("nodither", "lugre", "square-velocity", 0.0, 1000.0, 0.4, 50.0),
@@ -165,7 +181,7 @@ def timed_run(scene, p, points, settings: Settings, repeats: int) -> dict:
         if walls[-1] > 2.0:      # long runs: one timing is precise enough
             break
     n = len(points)
-    return {"outputs": {k: [float(x) for x in v] for k, v in res.outputs.items()},
+    return {"outputs": {k: np.asarray(v, dtype=float).tolist() for k, v in res.outputs.items()},
             "status": [int(s) for s in res.status], "steps": int(res.steps.sum()) // n,
             "rejected": int(res.rejected.sum()) // n, "evals": int(res.evals.sum()) // n,
             "time": float(np.median(walls)) / n}
@@ -188,6 +204,9 @@ def is_reference(row: dict, ref: dict) -> bool:
 # --------------------------------------------------------------------------- errors
 def quantity_error(name: str, q: float, q_ref: float) -> float:
     """Absolute error for time fractions, relative error otherwise (module docstring)."""
+    if isinstance(q, list):          # alpha_hist: the largest change of a bin's share
+        diffs = [abs(a - b) for a, b in zip(q, q_ref)]
+        return max(diffs) if all(math.isfinite(d) for d in diffs) else math.inf
     if not math.isfinite(q):
         return math.inf
     if name in FRACTIONS:
@@ -212,8 +231,9 @@ def ladder(name: str, method: str, dither: str) -> list[dict]:
     return own or LADDERS.get((method, dither)) or LADDERS[method]
 
 
-def study_scene(name: str, quick: bool, repeats: int) -> dict:
-    """Reference runs, their agreement, and every method's ladder on scene ``name``."""
+def study_scene(name: str, quick: bool, repeats: int, ladders: bool = True) -> dict:
+    """Reference runs, their agreement, and every method's ladder on scene ``name``
+    (``ladders=False``: the references alone, for the levels study)."""
     cfg = SCENES[name]
     plan = plan_of(cfg["spec"])
     for m in METHOD_ORDER:
@@ -226,7 +246,7 @@ def study_scene(name: str, quick: bool, repeats: int) -> dict:
     if refs[0]["status"][0] != S.OK:
         raise RuntimeError(f"{name}: the reference run {refs[0]['label']} failed")
     rows = []
-    for m in METHOD_ORDER:
+    for m in METHOD_ORDER if ladders else ():
         steps = ladder(name, m, plan.scene.dither)
         for s in (steps[::2] if quick else steps):
             row = run_setting(plan, m, s, repeats)
@@ -287,6 +307,9 @@ def main(argv=None) -> None:
     ap.add_argument("--scenes", nargs="*", default=list(SCENES), choices=list(SCENES))
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--no-effects", action="store_true", help="skip the effect-cost table")
+    ap.add_argument("--levels-only", action="store_true",
+                    help="references and the accuracy levels only (per-output promises), "
+                         "merged into an existing docs/work_precision.json")
     ap.add_argument("--replot", action="store_true",
                     help="only redraw PNGs and tables from docs/work_precision.json")
     args = ap.parse_args(argv)
@@ -295,6 +318,20 @@ def main(argv=None) -> None:
         report.write_all(json.loads(RESULTS.read_text()))
         return
     repeats = 1 if args.quick else args.repeats
+    if args.levels_only:
+        data = json.loads(RESULTS.read_text()) if RESULTS.exists() else {"scenes": {}}
+        fresh = {n: study_scene(n, args.quick, repeats, ladders=False) for n in args.scenes}
+        for n, res in fresh.items():   # keep the ladders of an earlier full run
+            old = data["scenes"].get(n, {})
+            data["scenes"][n] = {**res, "runs": old.get("runs", [])}
+        print("levels", flush=True)
+        data.setdefault("levels", {}).update(study_levels(fresh, repeats))
+        data.setdefault("meta", {})["levels_run"] = {
+            "engine": _engine_version(), "date": time.strftime("%Y-%m-%d %H:%M"),
+            "loadavg": [round(float(x), 2) for x in _loadavg()]}
+        RESULTS.write_text(json.dumps(data, indent=1, default=_json_default))
+        report.write_all(data)
+        return
     data = {"meta": {"quick": args.quick, "repeats": repeats, "atol_ratio": ATOL_RATIO,
                      "engine": _engine_version(),
                      "date": time.strftime("%Y-%m-%d %H:%M"),

@@ -158,6 +158,43 @@ def levels_table(levels: dict, bounds: dict | None) -> str:
                   "ms/point", "evals"], rows)
 
 
+PROMISE_COLUMNS = ("v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "presliding_fraction",
+                   "slip_fraction", "near_slip_fraction", "long_stick_fraction", "max_stick",
+                   "alpha_hist")
+SHORT = {"v_mean": "v_mean", "v_slow_p2p": "p2p", "F_mean": "F_mean", "stick_fraction": "stick",
+         "presliding_fraction": "pre", "slip_fraction": "slip", "near_slip_fraction": "near",
+         "long_stick_fraction": "long", "max_stick": "max_st", "alpha_hist": "hist"}
+
+
+def promises_table(levels: dict) -> str:
+    """Per scene and level: the error of every output against the scene's reference, marked
+    ** where it exceeds what the level promises for it (sweeps.accuracy.promise)."""
+    from sweeps.accuracy import promise
+    rows = []
+    for name, by_level in levels.items():
+        for level, r in by_level.items():
+            cells = []
+            for o in PROMISE_COLUMNS:
+                e = r["error"].get(o)
+                if e is None:
+                    cells.append("-")
+                    continue
+                cells.append(_e(e) if e <= promise(level, o) else f"**{_e(e)}**")
+            n = r["numerics"]
+            tol = f"{n['integrator']} " + (f"{n['rtol']:.0e}" if n["integrator"] != "rk4" else
+                                           (f"h={n['h']:g}" if r["dither"] == "none"
+                                            else f"N={n['steps_per_period']}"))
+            rows.append([name, level, tol, _ms(r["time"]), *cells])
+    return table(["scene", "level", "numerics", "ms/point", *(SHORT[o] for o in PROMISE_COLUMNS)],
+                 rows)
+
+
+def promise_rows() -> str:
+    from sweeps.accuracy import TARGET_ERROR, promise
+    rows = [[o, *(f"{promise(lv, o):.0e}" for lv in TARGET_ERROR)] for o in PROMISE_COLUMNS]
+    return table(["output", *TARGET_ERROR], rows)
+
+
 def quench_table(quench: dict) -> str:
     ws = next(iter(quench.values()))["W"]
     rows = []
@@ -250,6 +287,9 @@ def sections(data: dict) -> dict:
         sec[f"wp-{name}"] = f"![{name}]({plot_scene(name, res)})\n\n" + runs_table(res)
     if "levels" in data:
         sec["levels"] = levels_table(data["levels"], TARGET_ERROR)
+        sec["promises"] = (promise_rows() + "\n\nMeasured (error against each scene's "
+                           "reference; ** over the promise):\n\n"
+                           + promises_table(data["levels"]))
     if "quench" in data:
         sec["quench"] = quench_table(data["quench"])
     if "crossover" in data:

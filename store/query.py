@@ -268,11 +268,17 @@ def effective_friction_curve(ds: xr.Dataset, sel=None, var: str | None = None) -
 def table(ds: xr.Dataset, var: str | None = None, sel=None) -> pd.DataFrame:
     """One row per grid point: the four axes, the output(s) and ``status``.
 
-    ``var`` picks one output (default: all). Rows come in the cube's C order.
+    ``var`` picks one output (default: every output over the grid axes alone; an output
+    with an extra dimension such as ``alpha_hist`` comes only when asked for, one row per
+    point and bin, with the bin coordinate as a column). Rows come in the cube's C order.
     """
-    names = output_names(ds) if var is None else [var]
+    if var is None:
+        names = [n for n in output_names(ds) if ds[n].dims == AXES]
+    else:
+        names = [var]
     for name in names:
         _variable(ds, name, "table")
+    extra = [d for n in names for d in ds[n].dims[len(AXES):]]
     sub = select(ds, sel)[names + ["status"]]
     frame = sub.to_dataframe().reset_index()
-    return frame[list(AXES) + names + ["status"]]
+    return frame[list(AXES) + extra + names + ["status"]]
