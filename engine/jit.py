@@ -23,8 +23,9 @@ carries its UUID (:func:`_name_by_uuid`).
 
 numba checks only the source file of a cached function for changes, not the files of the
 functions it calls, so an edit elsewhere in the engine could replay stale machine code.
-The cache therefore lives in a folder named by a hash of every engine source file:
-``$DITHERLAB_CACHE_DIR`` (default ``~/.cache/ditherlab``) ``/numba-<hash>``. Any edit of
+The cache therefore lives in a folder named by a hash of every engine source file (the
+engine fingerprint, engine.provenance, also recorded in every cube):
+``$DITHERLAB_CACHE_DIR`` (default ``~/.cache/ditherlab``) ``/numba-<fingerprint>``. Any edit of
 the engine starts a fresh cache; delete old ``numba-*`` folders at will.
 """
 from __future__ import annotations
@@ -37,21 +38,12 @@ from pathlib import Path
 import numba
 import numpy
 
-ENGINE_ROOT = Path(__file__).resolve().parent
-
-
-def source_hash() -> str:
-    """12 hex digits of sha256 over the engine's Python sources (paths and contents)."""
-    digest = hashlib.sha256()
-    for path in sorted(ENGINE_ROOT.rglob("*.py")):
-        digest.update(str(path.relative_to(ENGINE_ROOT)).encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()[:12]
+from .provenance import fingerprint
 
 
 def cache_dir() -> Path:
     base = os.environ.get("DITHERLAB_CACHE_DIR") or Path.home() / ".cache" / "ditherlab"
-    return Path(base) / f"numba-{source_hash()}"
+    return Path(base) / f"numba-{fingerprint()}"
 
 
 def _use_engine_cache_dir() -> None:

@@ -21,6 +21,7 @@ SWEEP_ID = "sweep_id"  # the hash of the canonical spec
 NAME = "name"  # the spec's human name
 SPEC = "spec"  # the spec as canonical JSON
 VERSION = "ditherlab_version"  # package version that computed the cube
+FINGERPRINT = "engine_fingerprint"  # hash of the engine sources that computed it
 CREATED = "created"  # UTC ISO-8601 creation time
 SETTINGS = "engine_settings"  # engine settings actually used (JSON)
 CONVENTIONS = "Conventions"

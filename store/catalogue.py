@@ -63,12 +63,12 @@ CREATE TABLE IF NOT EXISTS sweeps (
 )"""
 _UPSERT = """
 INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_points,
-                    failed_points, done_blocks, path, created, updated)
+                    failed_points, done_blocks, path, created, updated, engine_fingerprint)
 VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points,
-        :failed_points, :done_blocks, :path, :created, :updated)
+        :failed_points, :done_blocks, :path, :created, :updated, :engine_fingerprint)
 ON CONFLICT(sweep_id) DO UPDATE SET name = excluded.name, spec_json = excluded.spec_json,
     n_points = excluded.n_points, n_blocks = excluded.n_blocks, path = excluded.path,
-    updated = excluded.updated"""
+    updated = excluded.updated, engine_fingerprint = excluded.engine_fingerprint"""
 _ADOPT = _UPSERT.split(" ON CONFLICT")[0] + " ON CONFLICT(sweep_id) DO NOTHING"
 
 
@@ -122,9 +122,11 @@ class Catalogue:
             con.execute("PRAGMA journal_mode=WAL")
             con.execute(_SCHEMA)
             columns = {row["name"] for row in con.execute("PRAGMA table_info(sweeps)")}
-            if "owner" not in columns:   # a catalogue written before owners existed
+            for name in ("owner", "engine_fingerprint"):   # added after the first catalogues
+                if name in columns:
+                    continue
                 try:
-                    con.execute("ALTER TABLE sweeps ADD COLUMN owner TEXT NOT NULL DEFAULT ''")
+                    con.execute(f"ALTER TABLE sweeps ADD COLUMN {name} TEXT NOT NULL DEFAULT ''")
                 except sqlite3.OperationalError as err:   # another process added it first
                     if "duplicate column" not in str(err):
                         raise
@@ -168,14 +170,17 @@ class Catalogue:
             return [dict(row) for row in con.execute(sql, args)]
 
     def register(
-        self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path
+        self, sweep_id: str, name: str, spec_json: str, n_points: int, n_blocks: int, path,
+        engine_fingerprint: str = "",
     ) -> dict:
         """Add a sweep in state ``queued``, or refresh a known one (resubmission).
 
-        ``path`` is the sweep's folder (``SweepDir.root``), as for adopted cubes.
+        ``path`` is the sweep's folder (``SweepDir.root``), as for adopted cubes;
+        ``engine_fingerprint`` names the engine that computes it (the cube attribute of
+        the same name; readers compare it with the installed engine's).
 
         A known sweep keeps its state, counts and creation time; its name, spec,
-        sizes and path are overwritten. Returns the row.
+        sizes, path and fingerprint are overwritten. Returns the row.
         """
         now = _now()
         row = dict(
@@ -191,6 +196,7 @@ class Catalogue:
             path=str(path),
             created=now,
             updated=now,
+            engine_fingerprint=str(engine_fingerprint),
         )
         with self._connection() as con:
             con.execute(_UPSERT, row)
@@ -325,4 +331,5 @@ def _row_from_cube(cube: Path) -> dict | None:
         path=str(cube.parent),
         created=str(created),
         updated=_now(),
+        engine_fingerprint=str(attrs.get(A.FINGERPRINT, "")),
     )

@@ -18,10 +18,17 @@ def run_sweep(spec, store: str | Path = "ditherlab-store", *, scheduler: str | N
 
 
 def open_sweep(key: str, store: str | Path = "ditherlab-store"):
-    """The cube of a sweep (id, id prefix or name) as an in-memory ``xarray.Dataset``."""
+    """The cube of a sweep (id, id prefix or name) as an in-memory ``xarray.Dataset``;
+    a ``UserWarning`` when it was made by another engine than the installed one."""
+    import warnings
+
     import store as _store
 
-    from .cli import resolve_sweep
+    from .cli import resolve_sweep, stale_note
 
-    _, cube = resolve_sweep(Path(store), key)
-    return _store.open_cube(cube)
+    sweep_id, cube = resolve_sweep(Path(store), key)
+    ds = _store.open_cube(cube)
+    note = stale_note(_store.Catalogue(Path(store)).get(sweep_id), ds, Path(store))
+    if note:
+        warnings.warn(note, stacklevel=2)
+    return ds

@@ -47,16 +47,76 @@ def resolve_sweep(root: Path, key: str) -> tuple[str, Path]:
     """A sweep id, id prefix or name -> (sweep id, cube path)."""
     import store
 
+    cat = store.Catalogue(root)
     try:
-        row = store.Catalogue(root).find(key)
+        row = cat.find(key)
     except LookupError as exc:  # an ambiguous id prefix
         raise UserError(str(exc)) from None
     if row is None:
         raise UserError(f"no sweep {key!r} in store {root} (see `ditherlab status`)")
+    if row["name"] == key and row["sweep_id"] != key and is_stale(row):
+        # a name: prefer the newest sweep of that name made by the installed engine
+        current = [r for r in cat.list() if r["name"] == key and not is_stale(r)
+                   and store.SweepDir(root, r["sweep_id"]).cube.exists()]
+        if current:
+            row = max(current, key=lambda r: r["created"])
     cube = store.SweepDir(root, row["sweep_id"]).cube
     if not cube.exists():
         raise UserError(f"sweep {row['sweep_id']} has no cube yet at {cube}; submit it again")
     return row["sweep_id"], cube
+
+
+# --- which engine made a sweep (README "Which engine made this cube") -------------------
+
+STALE = "stale: engine changed"
+
+
+def engine_of(row: dict, ds=None) -> str:
+    """Fingerprint of the engine that made a sweep: the cube's ``engine_fingerprint``
+    attribute, else the catalogue's; ``''`` when neither recorded one."""
+    made = ds.attrs.get("engine_fingerprint", "") if ds is not None else ""
+    return str(made or row.get("engine_fingerprint") or "")
+
+
+def is_stale(row: dict, ds=None) -> bool:
+    """True when a sweep was made by an engine other than the installed one.
+
+    Judged by the recorded fingerprint; without one (a sweep from before fingerprints,
+    or a row registered before its run began), by whether its spec still hashes to its id.
+    """
+    from engine import provenance
+
+    made = engine_of(row, ds)
+    if made:
+        return made != provenance.fingerprint()
+    try:
+        spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
+    except (SpecError, ValueError, TypeError):
+        return True
+    return spec.sweep_id != row["sweep_id"]
+
+
+def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
+    """One line saying a sweep is stale and how to recompute it, or None if current."""
+    import store
+    from engine import provenance
+
+    if not is_stale(row, ds):
+        return None
+    made = engine_of(row, ds) or "(not recorded)"
+    saved = store.SweepDir(root, row["sweep_id"]).spec if root is not None else None
+    spec = f" (e.g. {saved})" if saved is not None and saved.exists() else ""
+    return (f"sweep {row['sweep_id']} was made by engine {made}, the installed engine is "
+            f"{provenance.fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
+
+
+def _warn_stale(root: Path, sweep_id: str, ds) -> None:
+    """One stderr line when the sweep being served is stale (query, map)."""
+    import store
+
+    note = stale_note(store.Catalogue(root).get(sweep_id), ds, root)
+    if note:
+        print(f"ditherlab: warning: {note}", file=sys.stderr)
 
 
 # --- commands --------------------------------------------------------------------------
@@ -85,14 +145,17 @@ def cmd_status(args) -> int:
     if args.sweep:
         sweep_id, cube = resolve_sweep(store_root(args.store), args.sweep)
         row = cat.get(sweep_id)
-        row["state"] = cat.live_state(row)
+        ds = store.open_cube(cube)
+        live, note = cat.live_state(row), stale_note(row, ds, store_root(args.store))
+        row["state"] = f"{live} ({STALE})" if note else live
         for key, value in row.items():
             if key != "spec_json":
                 print(f"{key:>14}: {value}")
-        if row["state"] == store.catalogue.STALLED:
+        if note:
+            print(f"{'':>16}{note}")
+        elif live == store.catalogue.STALLED:
             print(f"{'':>16}the submitting process ({row['owner']}) is gone; submit the spec "
                   "again to resume (finished blocks are kept)")
-        ds = store.open_cube(cube)
         _print_error_estimate(ds)
         _warn_accuracy(ds)
         return 0
@@ -100,9 +163,11 @@ def cmd_status(args) -> int:
     if not rows:
         print(f"no sweeps in {store_root(args.store)}")
         return 0
-    print(f"{'sweep':<13}{'name':<24}{'state':<9}{'points':>8}{'done':>8}{'failed':>8}  updated")
-    for r in rows:
-        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{cat.live_state(r):<9}{r['n_points']:>8}"
+    states = [cat.live_state(r) + (f" ({STALE})" if is_stale(r) else "") for r in rows]
+    w = max(9, *(len(s) + 1 for s in states))
+    print(f"{'sweep':<13}{'name':<24}{'state':<{w}}{'points':>8}{'done':>8}{'failed':>8}  updated")
+    for r, state in zip(rows, states):
+        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{state:<{w}}{r['n_points']:>8}"
               f"{r['done_points']:>8}{r['failed_points']:>8}  {r['updated']}")
     return 0
 
@@ -134,8 +199,9 @@ def cmd_query(args) -> int:
     import store
 
     root = store_root(args.store)
-    _, cube = resolve_sweep(root, args.sweep)
+    sweep_id, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
     try:
         df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
@@ -154,8 +220,9 @@ def cmd_map(args) -> int:
     import store
 
     root = store_root(args.store)
-    _, cube = resolve_sweep(root, args.sweep)
+    sweep_id, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]

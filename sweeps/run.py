@@ -20,6 +20,7 @@ import numpy as np
 
 import store
 from engine import params as P
+from engine import provenance
 from engine import status as S
 
 from . import errors, history
@@ -107,6 +108,7 @@ def cube_attrs(plan: Plan) -> dict:
         "spec": plan.spec.to_json(),
         "spec_hash": plan.sweep_id,
         "ditherlab_version": __version__,
+        "engine_fingerprint": provenance.fingerprint(),   # also in the sweep id
         "created": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "path": plan.path,
         "system": plan.spec.system, "friction": plan.spec.friction,
@@ -156,7 +158,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     sweep.root.mkdir(parents=True, exist_ok=True)
     sweep.write_spec(plan.spec.to_json())
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
-                       len(plan.blocks), sweep.root)
+                       len(plan.blocks), sweep.root, provenance.fingerprint())
     catalogue.update(plan.sweep_id, state="running", owner=store.catalogue.owner_tag())
     store.publish(cube, sweep.cube)  # a valid cube exists from the first instant
     todo = todo[:max_blocks] if max_blocks is not None else todo

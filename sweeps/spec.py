@@ -184,8 +184,13 @@ class Spec(_Strict):
 
     @property
     def sweep_id(self) -> str:
-        """12 hex digits of sha256 over the canonical spec and the engine version."""
-        blob = json.dumps({"spec": self.canonical(), "engine": __version__},
+        """12 hex digits of sha256 over the canonical spec, the package version and the
+        engine fingerprint (engine.provenance: a hash of the engine sources), so a cube
+        made by another engine is never found as this spec's result."""
+        from engine import provenance
+
+        blob = json.dumps({"spec": self.canonical(), "engine": __version__,
+                           "engine_fingerprint": provenance.fingerprint()},
                           sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:12]
 

@@ -1,0 +1,149 @@
+"""Results tied to the engine that made them (issue 9, "no stale result served as current").
+
+The sweep id hashes the engine fingerprint (engine.provenance: sha256 over engine/**/*.py),
+so after any engine edit a resubmitted spec computes a fresh sweep instead of returning
+the old cube as "already complete"; the old cube stays readable and is marked stale.
+Engine edits are simulated on a copy of the engine tree or by monkeypatching
+``engine.provenance.fingerprint`` -- the real sources are never touched.
+"""
+import shutil
+import sqlite3
+
+import xarray as xr
+
+from engine import jit, provenance
+from store.catalogue import _SCHEMA, Catalogue
+from sweeps import cli
+from sweeps.spec import parse_spec
+
+FP_A, FP_B = "aaaaaaaaaaaa", "bbbbbbbbbbbb"
+
+TINY_AVERAGED = """
+name = "fp-avg"
+friction = "lugre"
+dither = "square-velocity"
+method = "averaged"
+[grid]
+W = [0.0, 0.5, 1.0]
+v_ref = [0.1, 0.5]
+v_d = [0.1]
+"""
+
+
+def engine_copy(tmp_path):
+    return shutil.copytree(provenance.ENGINE_ROOT, tmp_path / "engine",
+                           ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
+
+
+def test_any_engine_source_edit_changes_the_fingerprint(tmp_path):
+    copy = engine_copy(tmp_path)
+    before = provenance.source_hash(copy)
+    assert before == provenance.source_hash(provenance.ENGINE_ROOT) == provenance.fingerprint()
+    assert len(before) == 12 and int(before, 16) >= 0
+
+    with open(copy / "status.py", "a") as f:          # a comment is an edit too
+        f.write("# a comment\n")
+    after_comment = provenance.source_hash(copy)
+    assert after_comment != before
+    (copy / "friction" / "extra.py").write_text("X = 1\n")   # a new file, in a subpackage
+    after_new = provenance.source_hash(copy)
+    assert after_new not in (before, after_comment)
+    (copy / "friction" / "extra.py").rename(copy / "friction" / "other.py")   # a rename
+    assert provenance.source_hash(copy) not in (before, after_comment, after_new)
+    (copy / "notes.txt").write_text("not a source")   # non-Python files do not count
+    (copy / "friction" / "other.py").unlink()
+    (copy / "status.py").write_bytes((provenance.ENGINE_ROOT / "status.py").read_bytes())
+    assert provenance.source_hash(copy) == before
+
+
+def test_fingerprint_is_cached_and_names_the_numba_cache():
+    assert provenance.fingerprint() is provenance.fingerprint()
+    assert provenance.fingerprint.cache_info().hits >= 1
+    assert jit.cache_dir().name == f"numba-{provenance.fingerprint()}"
+
+
+def test_sweep_id_depends_on_the_engine_fingerprint(monkeypatch):
+    spec = parse_spec({"name": "x", "method": "averaged",
+                       "grid": {"W": [0.0, 1.0], "v_ref": [0.1], "v_d": [0.1]}})
+    renamed = spec.model_copy(update={"name": "y"})
+    monkeypatch.setattr(provenance, "fingerprint", lambda: FP_A)
+    id_a = spec.sweep_id
+    assert renamed.sweep_id == id_a                   # cosmetic fields still do not count
+    monkeypatch.setattr(provenance, "fingerprint", lambda: FP_B)
+    assert spec.sweep_id != id_a
+
+
+def run(capsys, *args) -> tuple[int, str, str]:
+    code = cli.main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stale(
+        tmp_path, monkeypatch, capsys):
+    store_dir = str(tmp_path / "store")
+    spec = tmp_path / "spec.toml"
+    spec.write_text(TINY_AVERAGED)
+    st = ("--store", store_dir)
+
+    monkeypatch.setattr(provenance, "fingerprint", lambda: FP_A)
+    code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
+    assert code == 0 and "ran " in out
+    old_id = out.split(":")[0]
+    code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
+    assert code == 0 and "already complete" in out and out.startswith(old_id)
+    with xr.open_dataset(tmp_path / "store" / old_id / "cube.h5", engine="h5netcdf") as ds:
+        assert ds.attrs["engine_fingerprint"] == FP_A
+    code, out, err = run(capsys, "status", *st)
+    assert "stale" not in out
+
+    # the engine changes: the old cube is stale, but still readable
+    monkeypatch.setattr(provenance, "fingerprint", lambda: FP_B)
+    code, out, _ = run(capsys, "status", *st)
+    assert code == 0 and f"done ({cli.STALE})" in out
+    code, out, err = run(capsys, "query", "fp-avg", "--var", "F_eff", "--format", "csv", *st)
+    assert code == 0 and out.startswith("W,")                # still answers ...
+    warnings = [line for line in err.splitlines() if "warning" in line]
+    assert len(warnings) == 1 and FP_A in warnings[0] and FP_B in warnings[0]  # ... one line
+    code, out, _ = run(capsys, "status", old_id, *st)
+    assert f"state: done ({cli.STALE})" in out
+    assert f"made by engine {FP_A}, the installed engine is {FP_B}" in out
+    assert "ditherlab submit SPEC" in out
+
+    # resubmitting computes a fresh sweep rather than serving the old cube
+    code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
+    assert code == 0 and "already complete" not in out and "ran " in out
+    new_id = out.split(":")[0]
+    assert new_id != old_id
+    with xr.open_dataset(tmp_path / "store" / new_id / "cube.h5", engine="h5netcdf") as ds:
+        assert ds.attrs["engine_fingerprint"] == FP_B
+    code, out, _ = run(capsys, "status", *st)
+    lines = {line.split()[0]: line for line in out.splitlines()[1:]}
+    assert cli.STALE in lines[old_id] and cli.STALE not in lines[new_id]
+
+    # the name now resolves to the current-engine sweep, without a warning
+    assert cli.resolve_sweep(tmp_path / "store", "fp-avg")[0] == new_id
+    code, out, err = run(capsys, "query", "fp-avg", "--var", "F_eff", *st)
+    assert code == 0 and "warning" not in err
+    code, out, err = run(capsys, "map", old_id, "--kind", "friction", "-o",
+                         str(tmp_path / "old.png"), *st)
+    assert code == 0 and err.count("warning") == 1 and old_id in err
+
+    # rows recorded no fingerprint before this change (legacy catalogues): judged by
+    # whether their spec still hashes to their id
+    con = sqlite3.connect(tmp_path / "store" / "catalogue.sqlite")
+    con.execute("UPDATE sweeps SET engine_fingerprint = ''")
+    con.commit()
+    con.close()
+    rows = {r["sweep_id"]: r for r in Catalogue(tmp_path / "store").list()}
+    assert cli.is_stale(rows[old_id]) and not cli.is_stale(rows[new_id])
+
+
+def test_old_catalogues_gain_the_fingerprint_column(tmp_path):
+    con = sqlite3.connect(tmp_path / "catalogue.sqlite")
+    con.execute(_SCHEMA)            # the first schema, without engine_fingerprint
+    con.close()
+    cat = Catalogue(tmp_path)
+    row = cat.register("abc", "n", "{}", 1, 1, tmp_path / "abc", engine_fingerprint=FP_A)
+    assert row["engine_fingerprint"] == FP_A
+    assert cat.register("def", "n", "{}", 1, 1, tmp_path / "def")["engine_fingerprint"] == ""
