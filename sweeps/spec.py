@@ -185,12 +185,13 @@ class Spec(_Strict):
     @property
     def sweep_id(self) -> str:
         """12 hex digits of sha256 over the canonical spec, the package version and the
-        engine fingerprint (engine.provenance: a hash of the engine sources), so a cube
-        made by another engine is never found as this spec's result."""
-        from engine import provenance
+        results fingerprint (sweeps.version: a hash of the engine sources and of the
+        planning modules that pick levels and tolerances), so a cube made by another
+        engine or another level table is never found as this spec's result."""
+        from .version import results_fingerprint
 
         blob = json.dumps({"spec": self.canonical(), "engine": __version__,
-                           "engine_fingerprint": provenance.fingerprint()},
+                           "engine_fingerprint": results_fingerprint()},
                           sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:12]
 

@@ -13,7 +13,7 @@ import xarray as xr
 
 from engine import jit, provenance
 from store.catalogue import _SCHEMA, Catalogue
-from sweeps import cli
+from sweeps import cli, version
 from sweeps.spec import parse_spec
 
 FP_A, FP_B = "aaaaaaaaaaaa", "bbbbbbbbbbbb"
@@ -79,6 +79,13 @@ def run(capsys, *args) -> tuple[int, str, str]:
     return code, out, err
 
 
+def test_a_planning_module_edit_changes_the_results_fingerprint(monkeypatch):
+    """sweeps/accuracy.py's level tables change results as surely as an engine edit."""
+    before = version.results_fingerprint()
+    monkeypatch.setattr(version, "_PLANNING_HASH", "edited accuracy tables")
+    assert version.results_fingerprint() != before
+
+
 def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stale(
         tmp_path, monkeypatch, capsys):
     store_dir = str(tmp_path / "store")
@@ -87,27 +94,30 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     st = ("--store", store_dir)
 
     monkeypatch.setattr(provenance, "fingerprint", lambda: FP_A)
+    RA = version.results_fingerprint()      # the engine's and the planning modules' hash
     code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
     assert code == 0 and "ran " in out
     old_id = out.split(":")[0]
     code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
     assert code == 0 and "already complete" in out and out.startswith(old_id)
     with xr.open_dataset(tmp_path / "store" / old_id / "cube.h5", engine="h5netcdf") as ds:
-        assert ds.attrs["engine_fingerprint"] == FP_A
+        assert ds.attrs["engine_fingerprint"] == RA
     code, out, err = run(capsys, "status", *st)
     assert "stale" not in out
 
     # the engine changes: the old cube is stale, but still readable
     monkeypatch.setattr(provenance, "fingerprint", lambda: FP_B)
+    RB = version.results_fingerprint()
+    assert RA != RB
     code, out, _ = run(capsys, "status", *st)
     assert code == 0 and f"done ({cli.STALE})" in out
     code, out, err = run(capsys, "query", "fp-avg", "--var", "F_eff", "--format", "csv", *st)
     assert code == 0 and out.startswith("W,")                # still answers ...
     warnings = [line for line in err.splitlines() if "warning" in line]
-    assert len(warnings) == 1 and FP_A in warnings[0] and FP_B in warnings[0]  # ... one line
+    assert len(warnings) == 1 and RA in warnings[0] and RB in warnings[0]  # ... one line
     code, out, _ = run(capsys, "status", old_id, *st)
     assert f"state: done ({cli.STALE})" in out
-    assert f"made by engine {FP_A}, the installed engine is {FP_B}" in out
+    assert f"made by engine {RA}, the installed engine is {RB}" in out
     assert "ditherlab submit SPEC" in out
 
     # resubmitting computes a fresh sweep rather than serving the old cube
@@ -116,7 +126,7 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     new_id = out.split(":")[0]
     assert new_id != old_id
     with xr.open_dataset(tmp_path / "store" / new_id / "cube.h5", engine="h5netcdf") as ds:
-        assert ds.attrs["engine_fingerprint"] == FP_B
+        assert ds.attrs["engine_fingerprint"] == RB
     code, out, _ = run(capsys, "status", *st)
     lines = {line.split()[0]: line for line in out.splitlines()[1:]}
     assert cli.STALE in lines[old_id] and cli.STALE not in lines[new_id]
