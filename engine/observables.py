@@ -11,7 +11,8 @@ Definitions (``T = t_end - t_transient``):
 - ``v_slow_p2p``: peak-to-peak over the window of the *dither-period average* of the body
   velocity, ``(x(t_{j+1}) - x(t_j)) / (t_{j+1} - t_j)`` over consecutive period
   boundaries ``t_j = j 2 pi / omega`` (the driver stops on them; square wave: every second
-  switch). Without dither: peak-to-peak of the velocity at the step ends. NaN when the
+  switch). Without dither: peak-to-peak of the velocity, each step's extreme taken from the
+  quadratic through its start, midpoint (dense output) and end. NaN when the
   window holds fewer than two period boundaries.
 - ``F_mean``: ``(Q(t_end) - Q(t_transient)) / T`` with ``Q`` the quadrature state ``dQ = F``.
 - ``stick_fraction`` / ``presliding_fraction`` / ``slip_fraction``: time shares of the
@@ -32,14 +33,15 @@ Definitions (``T = t_end - t_transient``):
   every kink, so it never does; ``sgn(u)`` is taken at the midpoint). ``rho`` is interpolated
   by the quadratic through the step's start, midpoint (dense output) and end, and each phase
   gets the measure of the part of the step where the quadratic lies in its band. Phase
-  boundaries inside a step are thus located to O(h^3), not rounded to a whole step. For laws
-  without alpha (lugre: stick means ``|u| < p[STICK_BAND]``; static laws: the Karnopp band),
-  slip otherwise, pre-sliding 0, judged at the step midpoint.
+  boundaries inside a step are thus located to O(h^3), not rounded to a whole step. Laws
+  without alpha: stick is ``|u| < p[STICK_BAND]`` (lugre: located by the quadratic of ``u``
+  in the same way; the static laws step onto their Karnopp band edges and breakaway, so
+  their midpoint phase holds for the whole step), slip otherwise, pre-sliding 0.
 - ``near_slip_fraction``: the share of time with ``alpha >= p[ALPHA_NEAR]`` (default 0.9), from
   the same quadratic; ``alpha`` crosses 0.9 transversally, so unlike ``slip_fraction`` it is
   well conditioned at any tolerance. Laws without alpha: the slip share.
 - ``long_stick_fraction`` / ``max_stick``: a *sticking run* is an uninterrupted stretch of
-  steps in the stick phase (judged at the midpoint; clipped to the window); the paper's
+  time in the stick phase, its ends at the interpolated crossings (clipped to the window); the paper's
   "long-duration stick" (Sec. 7, never defined there) is a run longer than ``p[LONG_STICK]``.
   ``long_stick_fraction`` = total time in long runs / T, ``max_stick`` = the longest run.
 - ``alpha_hist``: the time shares of alpha in :data:`N_HIST` equal bins of [0, 1] (the paper's
@@ -66,8 +68,9 @@ O_T_STICK, O_T_PRE, O_T_SLIP = 4, 5, 6
 O_RUN, O_LONG, O_MAX = 7, 8, 9
 O_VMIN, O_VMAX, O_XPREV, O_TPREV = 10, 11, 12, 13
 O_T_NEAR = 14
-O_R_SLIP, O_R_NEAR = 15, 16     # the rho thresholds of sliding and of alpha_near
-O_R_EDGE = 17                   # rho at the inner alpha bin edges 1/N_HIST ... (N_HIST-1)/N_HIST
+O_R_STICK, O_R_SLIP, O_R_NEAR = 15, 16, 17   # rho at the stick edge (lam), at sliding
+                                              # (1 - gap) and at alpha_near
+O_R_EDGE = 18                   # rho at the inner alpha bin edges 1/N_HIST ... (N_HIST-1)/N_HIST
 N_HIST = VECTOR["alpha_hist"][1]
 O_HIST = O_R_EDGE + N_HIST - 1
 O_SIZE = O_HIST + N_HIST
@@ -120,9 +123,10 @@ def make_observer(scene, system) -> Observer:
     period_stops = p2p and not undithered
     elasto = scene.friction == "elastoplastic"
     hooks = _make_hooks(system, phases, hist, p2p and undithered, period_stops, elasto,
-                        make_g(scene.stribeck))
+                        scene.friction == "lugre", make_g(scene.stribeck))
     finish = _make_finish(system, names, hist)
-    return Observer(O_SIZE, names, hist, phases, period_stops, *hooks, finish)
+    needs_mid = phases or (p2p and undithered)
+    return Observer(O_SIZE, names, hist, needs_mid, period_stops, *hooks, finish)
 
 
 @njit(error_model="numpy")
@@ -131,21 +135,16 @@ def rho_of_alpha(a, lam):
     return 0.5 * (1.0 + lam) + (1.0 - lam) / np.pi * math.asin(2.0 * a - 1.0)
 
 
+@njit(inline="always", error_model="numpy")
+def _coeffs(r0, rm, r1):
+    """``(a, b)`` of the quadratic ``q(s) = a s^2 + b s + r0`` through ``(0, r0)``,
+    ``(1/2, rm)``, ``(1, r1)``."""
+    return 2.0 * (r0 + r1) - 4.0 * rm, 4.0 * rm - 3.0 * r0 - r1
+
+
 @njit(error_model="numpy")
-def share_above(r0, rm, r1, thr):
-    """Measure of ``{s in [0, 1]: q(s) >= thr}`` for the quadratic ``q`` through
-    ``(0, r0)``, ``(1/2, rm)``, ``(1, r1)``."""
-    lo = min(r0, rm, r1)
-    a = 2.0 * (r0 + r1) - 4.0 * rm
-    b = 4.0 * rm - 3.0 * r0 - r1
-    c = r0 - thr
-    if lo >= thr and (a <= 0.0 or not 0.0 < -b / (2.0 * a) < 1.0
-                      or c - b * b / (4.0 * a) >= 0.0):
-        return 1.0
-    if max(r0, rm, r1) < thr and (a >= 0.0 or not 0.0 < -b / (2.0 * a) < 1.0
-                                  or c - b * b / (4.0 * a) < 0.0):
-        return 0.0
-    # roots of q - thr in (0, 1), at most two, in increasing order
+def _roots(a, b, c):
+    """The roots of ``a s^2 + b s + c`` inside (0, 1), ascending; 2.0 marks 'none'."""
     s1, s2 = 2.0, 2.0
     if abs(a) <= 1e-12 * (abs(b) + abs(c)):
         if b != 0.0:
@@ -159,8 +158,22 @@ def share_above(r0, rm, r1, thr):
             s1, s2 = min(x1, x2), max(x1, x2)
     if not 0.0 < s1 < 1.0:
         s1, s2 = s2, 2.0
+    if not 0.0 < s1 < 1.0:
+        s1 = 2.0
     if not 0.0 < s2 < 1.0:
         s2 = 2.0
+    return s1, s2
+
+
+@njit(error_model="numpy")
+def share_above(r0, rm, r1, thr):
+    """Measure of ``{s in [0, 1]: q(s) >= thr}`` for the quadratic ``q`` through
+    ``(0, r0)``, ``(1/2, rm)``, ``(1, r1)``."""
+    if min(r0, rm, r1) >= thr and max(r0, rm, r1) == min(r0, rm, r1):
+        return 1.0
+    a, b = _coeffs(r0, rm, r1)
+    c = r0 - thr
+    s1, s2 = _roots(a, b, c)
     total, left = 0.0, 0.0
     for right in (s1, s2, 1.0):
         if right > 1.0:
@@ -172,8 +185,45 @@ def share_above(r0, rm, r1, thr):
     return total
 
 
-def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto):
-    """The per-step hook: phase bookkeeping and/or step-end velocity extremes."""
+@njit(error_model="numpy")
+def _stick_pass(obs, t0, h, r0, rm, r1, lo, hi, long_stick):
+    """Book the sticking part ``{lo < q(s) <= hi}`` of the step ``[t0, t0 + h]`` (``q``
+    the quadratic through ``r0, rm, r1``) and the sticking runs it opens, extends and
+    closes, at the interpolated crossing instants. Returns the sticking share of the step."""
+    a, b = _coeffs(r0, rm, r1)
+    p1, p2 = _roots(a, b, r0 - lo) if lo > -np.inf else (2.0, 2.0)
+    p3, p4 = _roots(a, b, r0 - hi) if hi < np.inf else (2.0, 2.0)
+    # the (at most four) breakpoints in ascending order: a small sorting network
+    if p1 > p3:
+        p1, p3 = p3, p1
+    if p2 > p4:
+        p2, p4 = p4, p2
+    if p1 > p2:
+        p1, p2 = p2, p1
+    if p3 > p4:
+        p3, p4 = p4, p3
+    if p2 > p3:
+        p2, p3 = p3, p2
+    stick, left = 0.0, 0.0
+    for right in (p1, p2, p3, p4, 1.0):
+        if right > 1.0 or right <= left:
+            continue
+        mid = 0.5 * (left + right)
+        q = (a * mid + b) * mid + r0
+        sticking = lo < q <= hi
+        if sticking:
+            stick += right - left
+        _run_bookkeeping(obs, t0 + left * h, sticking, long_stick)
+        left = right
+    return stick
+
+
+def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto, band_law):
+    """The per-step hook: phase bookkeeping and/or step-end velocity extremes.
+
+    ``band_law``: stick is ``|u| < stick_band`` (lugre), located inside the step by the
+    quadratic of ``u``; the static laws stop on their band edges and breakaway instead, so
+    their midpoint phase holds for the whole step."""
     if not (phases or p2p_steps):
         # nothing is reduced per step: an empty hook the compiler removes (~6 % of a step)
         @njit(inline="always", error_model="numpy")
@@ -191,23 +241,42 @@ def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elas
         if obs[O_ON] == 0.0:
             return
         if phases:
-            um, _, am = interface(0.5 * (t0 + t1), ymid, p, sq)
-            if elasto and am != 0.0:
+            tm = 0.5 * (t0 + t1)
+            um, _, am = interface(tm, ymid, p, sq)
+            if elasto and um != 0.0:
                 su = 1.0 if um > 0.0 else -1.0
-                _add_elasto(obs, t0, t1, rho(t0, y0, p, sq, su),
-                            rho(0.5 * (t0 + t1), ymid, p, sq, su), rho(t1, y1, p, sq, su),
-                            p[P.LAM], hist)
-                _run_bookkeeping(obs, t0, False, p[P.LONG_STICK])
+                _add_elasto(obs, t0, t1, rho(t0, y0, p, sq, su), rho(tm, ymid, p, sq, su),
+                            rho(t1, y1, p, sq, su), p[P.LONG_STICK], hist)
+            elif band_law:
+                u0, _, _ = interface(t0, y0, p, sq)
+                u1, _, _ = interface(t1, y1, p, sq)
+                _add_band(obs, t0, t1, u0, um, u1, p[P.STICK_BAND], p[P.LONG_STICK], hist)
             else:
                 _add_phase(obs, t0, t1, am, p[P.LONG_STICK], hist)
         if p2p_steps:
-            v = velocity(t1, y1, p, sq)
-            obs[O_VMIN] = min(obs[O_VMIN], v)
-            obs[O_VMAX] = max(obs[O_VMAX], v)
+            v1 = velocity(t1, y1, p, sq)
+            lo, hi = _quadratic_extremes(velocity(t0, y0, p, sq),
+                                         velocity(0.5 * (t0 + t1), ymid, p, sq), v1)
+            obs[O_VMIN] = min(obs[O_VMIN], lo)
+            obs[O_VMAX] = max(obs[O_VMAX], hi)
     return observe
 
 
-def _make_hooks(system, phases, hist, p2p_steps, p2p_periods, elasto, g):
+@njit(inline="always", error_model="numpy")
+def _quadratic_extremes(v0, vm, v1):
+    """(min, max) over the step of the quadratic through the velocity at its start, midpoint
+    and end: a peak between step ends is caught to O(h^3), not sampled at the ends."""
+    lo, hi = min(v0, v1), max(v0, v1)
+    a, b = _coeffs(v0, vm, v1)
+    if a != 0.0:
+        s = -b / (2.0 * a)
+        if 0.0 < s < 1.0:
+            v = (a * s + b) * s + v0
+            lo, hi = min(lo, v), max(hi, v)
+    return lo, hi
+
+
+def _make_hooks(system, phases, hist, p2p_steps, p2p_periods, elasto, band_law, g):
     interface, position, velocity, qf = (system.interface, system.position,
                                          system.velocity, system.qf)
 
@@ -232,13 +301,14 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods, elasto, g):
             obs[O_VMAX] = v
         if phases and elasto:
             lam = p[P.LAM]
+            obs[O_R_STICK] = lam
             obs[O_R_SLIP] = 1.0 - p[P.SLIP_GAP]
             obs[O_R_NEAR] = rho_of_alpha(min(max(p[P.ALPHA_NEAR], 0.0), 1.0), lam)
             for k in range(1, N_HIST):
                 obs[O_R_EDGE + k - 1] = rho_of_alpha(k / N_HIST, lam)
 
     observe = _make_observe(interface, velocity, system.z_index, g, phases, hist, p2p_steps,
-                            elasto)
+                            elasto, band_law)
 
     @njit(inline="always", error_model="numpy")
     def stop(t, y, p, is_period, obs):
@@ -256,15 +326,15 @@ def _make_hooks(system, phases, hist, p2p_steps, p2p_periods, elasto, g):
 
 
 @njit(error_model="numpy")
-def _add_elasto(obs, t0, t1, r0, rm, r1, lam, hist):
-    """Book the step ``[t0, t1]`` of a non-sticking midpoint by the quadratic of ``rho``
-    (module docstring): stick below ``lam``, sliding above ``1 - gap``."""
+def _add_elasto(obs, t0, t1, r0, rm, r1, long_stick, hist):
+    """Book the step ``[t0, t1]`` by the quadratic of ``rho`` (module docstring): stick at
+    or below ``lam``, sliding above ``1 - gap``; sticking runs at the crossing instants."""
     h = t1 - t0
-    moving = share_above(r0, rm, r1, lam)
+    stick = _stick_pass(obs, t0, h, r0, rm, r1, -np.inf, obs[O_R_STICK], long_stick)
     slip = share_above(r0, rm, r1, obs[O_R_SLIP])
-    obs[O_T_STICK] += h * (1.0 - moving)
+    obs[O_T_STICK] += h * stick
     obs[O_T_SLIP] += h * slip
-    obs[O_T_PRE] += h * max(moving - slip, 0.0)
+    obs[O_T_PRE] += h * max(1.0 - stick - slip, 0.0)
     obs[O_T_NEAR] += h * share_above(r0, rm, r1, obs[O_R_NEAR])
     if hist:
         prev = 1.0
@@ -272,6 +342,20 @@ def _add_elasto(obs, t0, t1, r0, rm, r1, lam, hist):
             above = share_above(r0, rm, r1, obs[O_R_EDGE + k]) if k < N_HIST - 1 else 0.0
             obs[O_HIST + k] += h * max(prev - above, 0.0)
             prev = above
+
+
+@njit(error_model="numpy")
+def _add_band(obs, t0, t1, u0, um, u1, band, long_stick, hist):
+    """Book the step of a law without alpha (lugre): stick while ``|u| < band`` (the
+    quadratic of ``u``), slip otherwise."""
+    h = t1 - t0
+    stick = _stick_pass(obs, t0, h, u0, um, u1, -band, band, long_stick)
+    obs[O_T_STICK] += h * stick
+    obs[O_T_SLIP] += h * (1.0 - stick)
+    obs[O_T_NEAR] += h * (1.0 - stick)
+    if hist:
+        obs[O_HIST] += h * stick
+        obs[O_HIST + N_HIST - 1] += h * (1.0 - stick)
 
 
 @njit(error_model="numpy")

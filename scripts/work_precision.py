@@ -211,6 +211,8 @@ def quantity_error(name: str, q: float, q_ref: float) -> float:
         return math.inf
     if name in FRACTIONS:
         return abs(q - q_ref)
+    if name == "max_stick":     # against the long-stick threshold (sweeps.accuracy.promise)
+        return abs(q - q_ref) / max(abs(q_ref), P.PAPER_DEFAULTS["long_stick"])
     if q_ref == 0.0:
         return abs(q)
     return abs(q - q_ref) / abs(q_ref)

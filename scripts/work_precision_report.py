@@ -45,7 +45,7 @@ def plot_scene(name: str, res: dict) -> str:
         ax.set_visible(False)
     for ax, q in zip(axes.flat, panels):
         for m in wp.METHOD_ORDER:
-            rows = [r for r in res["runs"] if r["method"] == m and math.isfinite(r["error"][q])
+            rows = [r for r in res["runs"] if r["method"] == m and math.isfinite(r["error"].get(q, math.inf))
                     and not wp.is_reference(r, res["refs"][0])]
             if not rows:
                 continue
@@ -99,17 +99,28 @@ def table(header: list[str], rows: list[list]) -> str:
     return "\n".join(lines)
 
 
+def _value(x) -> str:
+    """A reference value: a number, or the largest bin of a histogram."""
+    if isinstance(x, list):
+        return f"max bin {max(x):.6g}"
+    return f"{x:.10g}"
+
+
+def _e_or_dash(x) -> str:
+    return "-" if x is None else _e(x)
+
+
 def refs_table(scenes: dict) -> str:
     out = []
     for name, res in scenes.items():
         r0 = res["refs"][0]
         rows = [[f"{r0['method']} {r0['label']}", "(reference)", _ms(r0["time"]),
-                 *[f"{r0['outputs'][q][0]:.10g}" for q in res["queried"]]]]
+                 *[_value(r0["outputs"][q][0]) for q in res["queried"]]]]
         for r in res["refs"][1:]:
             ok = r["status"][0] == 0
             rows.append([f"{r['method']} {r['label']}", "agrees to" if ok else
                          f"**failed** (status {r['status'][0]})", _ms(r["time"]),
-                         *[_e(r["agreement"][q]) for q in res["queried"]]])
+                         *[_e_or_dash(r["agreement"].get(q)) for q in res["queried"]]])
         out.append(f"**{name}**\n\n" + table(["run", "", "ms"] + res["queried"], rows))
     return "\n\n".join(out)
 
@@ -121,7 +132,7 @@ def runs_table(res: dict) -> str:
                else _e(r["error"]["combined"]))
         rows.append([r["method"], r["label"], _ms(r["time"]), r["steps"], r["rejected"],
                      r["evals"], err,
-                     *[_e(r["error"][q]) for q in res["queried"]]])
+                     *[_e_or_dash(r["error"].get(q)) for q in res["queried"]]])
     return table(["method", "setting", "ms/point", "steps", "rejected", "evals", "error"]
                  + res["queried"], rows)
 
@@ -172,6 +183,7 @@ def promises_table(levels: dict) -> str:
     from sweeps.accuracy import promise
     rows = []
     for name, by_level in levels.items():
+        friction = wp.SCENES[name]["spec"]["friction"] if name in wp.SCENES else None
         for level, r in by_level.items():
             cells = []
             for o in PROMISE_COLUMNS:
@@ -179,7 +191,7 @@ def promises_table(levels: dict) -> str:
                 if e is None:
                     cells.append("-")
                     continue
-                cells.append(_e(e) if e <= promise(level, o) else f"**{_e(e)}**")
+                cells.append(_e(e) if e <= promise(level, o, friction) else f"**{_e(e)}**")
             n = r["numerics"]
             tol = f"{n['integrator']} " + (f"{n['rtol']:.0e}" if n["integrator"] != "rk4" else
                                            (f"h={n['h']:g}" if r["dither"] == "none"
@@ -190,8 +202,11 @@ def promises_table(levels: dict) -> str:
 
 
 def promise_rows() -> str:
-    from sweeps.accuracy import TARGET_ERROR, promise
+    from sweeps.accuracy import LAW_PROMISE_OVERRIDES, TARGET_ERROR, promise
     rows = [[o, *(f"{promise(lv, o):.0e}" for lv in TARGET_ERROR)] for o in PROMISE_COLUMNS]
+    for law, by_output in LAW_PROMISE_OVERRIDES.items():
+        for o in by_output:
+            rows.append([f"{o} ({law})", *(f"{promise(lv, o, law):.0e}" for lv in TARGET_ERROR)])
     return table(["output", *TARGET_ERROR], rows)
 
 

@@ -68,9 +68,20 @@ FRACTION_OUTPUTS = ("stick_fraction", "presliding_fraction", "slip_fraction",
                     "long_stick_fraction", "near_slip_fraction", "alpha_hist", "stable")
 
 
-def promise(level: str, output: str) -> float:
-    """The error ``level`` promises for ``output`` (absolute for fractions, else relative)."""
-    return PROMISE_OVERRIDES.get(output, {}).get(level, TARGET_ERROR[level])
+# LuGre has no stick phase: its "stick" is |u| < stick_band (1e-6), a sliver around each
+# zero crossing of u located inside a step by a quadratic (O(h^3)); at the reference level
+# that is 2e-7 off on Fig. 10(d) (docs/ACCURACY.md 5.1)
+LAW_PROMISE_OVERRIDES = {
+    "lugre": {o: {"reference": 1e-6} for o in ("stick_fraction", "slip_fraction",
+                                                "near_slip_fraction", "alpha_hist")},
+}
+
+
+def promise(level: str, output: str, friction: str | None = None) -> float:
+    """The error ``level`` promises for ``output`` (absolute for fractions; relative
+    otherwise, ``max_stick`` relative to ``max(value, long_stick)``) under ``friction``."""
+    law = LAW_PROMISE_OVERRIDES.get(friction or "", {}).get(output, {})
+    return law.get(level, PROMISE_OVERRIDES.get(output, {}).get(level, TARGET_ERROR[level]))
 
 
 def needs_phase_accuracy(spec: Spec) -> bool:

@@ -28,6 +28,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from engine import params as P
 from engine import status as S
 
 from .accuracy import FRACTION_OUTPUTS, Numerics, numerics, promise
@@ -42,8 +43,6 @@ REL_FLOOR = 1e-3
 
 def finer_numerics(plan: Plan) -> Numerics:
     """The next level up, or the same integrator at tolerances / 100 at the top."""
-    from engine import params as P
-
     level = FINER.get(plan.numerics.label)
     if level is not None:
         return numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
@@ -109,11 +108,13 @@ def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dic
             err = diff
         else:
             floor = REL_FLOOR * float(np.nanmax(np.abs(fine))) if np.isfinite(fine).any() else 0
+            if name == "max_stick":   # a run matters against the long-stick threshold
+                floor = max(floor, float(plan.params[P.LONG_STICK]))
             err = diff / np.maximum(np.maximum(np.abs(fine), floor), 1e-300)
         worst = float(np.nanmax(err)) if np.isfinite(err).any() else float("inf")
         if np.isnan(coarse).any() != np.isnan(fine).any():
             worst = float("inf")
-        change[name], promised[name] = worst, promise(level, name)
+        change[name], promised[name] = worst, promise(level, name, plan.spec.friction)
         if not worst <= promised[name]:
             warnings.append(_warning(name, worst, promised[name], plan.numerics.label, label))
     dropped = int((~ok).sum())
