@@ -28,7 +28,7 @@ import numpy as np
 import xarray as xr
 
 from . import attrs as A
-from .layout import atomic_write, remove_stale_temps
+from .layout import SPEC_NAME, StoreError, atomic_write, remove_stale_temps
 
 AXES = ("W", "omega", "v_ref", "v_d")
 AXIS_META = {  # axis -> (long_name, default units); the contact system overrides units
@@ -306,7 +306,11 @@ def publish(ds: xr.Dataset, path) -> Path:
     """Write ``ds`` to ``path`` atomically (temporary file, fsync, rename, fsync folder).
 
     A reader of ``path`` sees the previous file or the new one, never a torn file; a
-    writer killed before the rename leaves the old file intact. Temporary files of
+    writer killed before the rename leaves the old file intact. The netCDF image is
+    made in memory first, so HDF5 never meets a full disk (which it survives badly: a
+    failed flush inside HDF5 can end the process with a segmentation fault); free space
+    is checked before the temporary file is written, and a full disk raises
+    ``store.layout.NoSpaceError`` with the previous cube untouched. Temporary files of
     dead writers in the same folder are removed first. Returns ``path``.
     """
     path = Path(path)
@@ -316,21 +320,32 @@ def publish(ds: xr.Dataset, path) -> Path:
         var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
     if path.parent.exists():
         remove_stale_temps(path.parent)
-    return atomic_write(
-        path, lambda tmp: out.to_netcdf(tmp, engine="h5netcdf", encoding=_encoding(out))
-    )
+    image = out.to_netcdf(engine="h5netcdf", encoding=_encoding(out))
+    return atomic_write(path, image)
+
+
+def cube_bytes(ds: xr.Dataset) -> int:
+    """A generous size of ``ds`` as a published file: its values uncompressed plus
+    HDF5's metadata (for free-space checks before a run)."""
+    return int(sum(v.nbytes for v in ds.variables.values())) + 64 * 1024 + 2048 * len(ds.variables)
+
+
+class CubeError(StoreError, ValueError):
+    """A cube file that cannot be read; the message says how to repair it."""
 
 
 def open_cube(path) -> xr.Dataset:
-    """Read a cube fully into memory and close the file.
+    """Read a cube fully into memory and close the file (read-only; works on a read-only
+    store).
 
     Raises
     ------
     FileNotFoundError
         If there is no file at ``path``.
-    ValueError
-        If the file is unreadable or not a ditherlab cube (dims other than ``AXES``,
-        no ``status``).
+    CubeError
+        (a ``ValueError``) if the file is unreadable or not a ditherlab cube (dims other
+        than ``AXES``, no ``status``); the message names the command that republishes
+        it from the sweep's journal.
     """
     path = Path(path)
     if not path.is_file():
@@ -338,10 +353,35 @@ def open_cube(path) -> xr.Dataset:
     try:
         with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
             ds = f.load()
-    except (OSError, KeyError, ValueError) as err:  # h5py reports a torn file as KeyError/OSError
-        raise ValueError(
-            f"the cube at {path} is unreadable ({err}); submit the spec again to "
-            f"republish it from the journal"
+        _check_layout(ds, f"open_cube({path})")
+    except (OSError, KeyError, ValueError, RuntimeError) as err:  # h5py: torn file = KeyError/OSError
+        spec = path.parent / SPEC_NAME
+        how = (f" (ditherlab submit {spec} --store {path.parent.parent})"
+               if spec.exists() else "")
+        text = f"{type(err).__name__}: {err}".replace("\n", " ")
+        raise CubeError(
+            f"the cube at {path} is unreadable ({text[:160]}); submit the spec again{how} "
+            "to republish it from the journal"
         ) from err
-    _check_layout(ds, f"open_cube({path})")
     return ds
+
+
+def disagreement(path, ds: xr.Dataset) -> str | None:
+    """``None`` if the published cube at ``path`` holds exactly ``ds`` (every variable
+    and coordinate, and the attributes but ``created``), else why not, in a few words."""
+    try:
+        pub = open_cube(path)
+    except FileNotFoundError:
+        return "the cube is missing"
+    except CubeError as err:
+        return f"the cube is unreadable ({err.__cause__})"
+    if set(pub.variables) != set(ds.variables):
+        return "the cube has other variables than the journal's"
+    for name, var in ds.variables.items():
+        if not var.equals(pub.variables[name]):
+            return f"the cube's {name} differs from the journal's"
+    attrs = [A.canonical_json(A.encode({k: v for k, v in d.attrs.items() if k != A.CREATED}))
+             for d in (ds, pub)]
+    if attrs[0] != attrs[1]:
+        return "the cube's attributes differ from the journal's"
+    return None

@@ -1,13 +1,13 @@
-"""Crash-safe journal of finished blocks (DESIGN.md §4).
+"""Crash-safe journal of finished blocks (DESIGN.md §4): the truth a cube is rebuilt from.
 
 The submitting process is the only writer. Each finished block of points goes to
 its own small ``.npz`` file ``<sweep>/journal/block-000042.npz``, written under a
 temporary name, fsynced and renamed, so a file with a final name is always
 complete. The cube is rebuilt from the journal (``rebuild``) and published every
-few blocks and at the end; a resumed sweep submits only the blocks missing from
-``Journal.done()``.
+few blocks and at the end; a resumed sweep computes only the blocks the journal
+lacks.
 
-A block's payload is a flat dict of 1-D arrays of one length ``n``:
+A block's payload is a flat dict of arrays with one row per point (``n`` rows):
 
 =========  =======  ==========================================
 key        dtype    meaning
@@ -17,18 +17,32 @@ status     int8     status codes 0..3
 cost_s     float64  seconds per point
 steps      int64    accepted steps per point
 evals      int64    right-hand-side evaluations per point
-<output>   float64  one array per cube output, e.g. ``F_mean``
+<output>   float64  one array per cube output, e.g. ``F_mean`` (``(n, k)`` for a
+                    vector output such as ``alpha_hist``)
 =========  =======  ==========================================
 
 ``block_payload`` builds it from the same arguments as ``store.cube.fill``.
+
+Every block file also holds ``_sha256``: the SHA-256 of its block id and of each
+array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes,
+and (``rebuild``) the cube's shape, index range and status codes and the plan's
+points of that block. A block that fails any check is never read as data: it is
+moved to ``journal/bad/`` with one warning line and its points are computed again.
+Blocks without a checksum (journals written before checksums existed, or files
+written by another program) are treated the same way: they cannot be verified, so
+they are set aside and recomputed rather than trusted.
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
+import os
 import re
+import time
 import warnings
-import zipfile
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
+from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
@@ -44,7 +58,17 @@ FIELDS = {
     "steps": np.int64,
     "evals": np.int64,
 }
+CHECKSUM = "_sha256"
+BAD_DIR = "bad"
 _NAME = re.compile(r"^block-(\d+)\.npz$")
+
+
+class JournalWarning(UserWarning):
+    """A journal block was set aside (damaged, unverifiable, or not of this sweep)."""
+
+
+class BadBlock(ValueError):
+    """Why a block file cannot be trusted (the warning's text)."""
 
 
 def block_payload(
@@ -67,12 +91,18 @@ def block_payload(
     return _checked(payload)
 
 
-def _checked(payload: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+def _checked(payload: Mapping[str, np.ndarray], strict: bool = False) -> dict[str, np.ndarray]:
+    """The payload's arrays with the journal's dtypes (``strict``: they must have them)."""
     missing = [k for k in FIELDS if k not in payload]
     if missing:
         raise ValueError(
             f"journal payload lacks {missing}; build it with store.journal.block_payload"
         )
+    if strict:
+        wrong = {k: str(np.asarray(v).dtype) for k, v in payload.items()
+                 if np.asarray(v).dtype != FIELDS.get(k, np.float64)}
+        if wrong:
+            raise ValueError(f"journal payload has wrong dtypes {wrong}")
     out = {k: np.asarray(v, dtype=FIELDS.get(k, np.float64)) for k, v in payload.items()}
     n = out["index"].shape
     # one row per point; an output may carry one extra trailing axis (alpha_hist)
@@ -82,6 +112,23 @@ def _checked(payload: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
         raise ValueError(f"journal payload arrays must have index's length {n[0]} first "
                          f"(1-D, or 2-D for a vector output); got {bad}")
     return out
+
+
+def checksum(block_id: int, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
+    """SHA-256 (32 uint8) of a block's id and its arrays' names, dtypes, shapes and bytes."""
+    h = hashlib.sha256(f"ditherlab journal block {int(block_id)}\n".encode())
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name} {a.dtype.str} {a.shape}\n".encode())
+        h.update(a.tobytes())
+    return np.frombuffer(h.digest(), dtype=np.uint8)
+
+
+def block_bytes(n_points: int, n_values: int) -> int:
+    """A generous size on disk of one block file: ``n_points`` rows of ``n_values``
+    numbers (every field and output value of a point), rounded up to whole 4 KiB pages."""
+    raw = 8 * n_points * n_values + 300 * (n_values + 1)
+    return -(-raw // 4096) * 4096
 
 
 class Journal:
@@ -106,60 +153,105 @@ class Journal:
         return self.folder / f"block-{int(block_id):06d}.npz"
 
     def write(self, block_id: int, payload: Mapping[str, np.ndarray]) -> Path:
-        """Record a finished block atomically (temporary name, fsync, rename).
+        """Record a finished block atomically (temporary name, fsync, rename), with its
+        checksum. Free space is checked first (``store.layout.NoSpaceError``).
 
         Writing a block again replaces it. Returns the file's path.
         """
+        path = self.path(block_id)
         arrays = _checked(payload)
+        buf = io.BytesIO()
+        np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
+        return atomic_write(path, buf.getbuffer())
 
-        def save(tmp: Path) -> None:
-            with open(tmp, "wb") as f:  # a file object: np.savez must not append ".npz"
-                np.savez(f, **arrays)
-
-        return atomic_write(self.path(block_id), save)
-
-    def _complete(self) -> dict[int, Path]:
-        blocks = {}
+    def files(self) -> dict[int, Path]:
+        """Block id -> file, for every file with a block's final name (unverified).
+        Temporary files of writers that are gone are removed first."""
         if not self.folder.is_dir():
-            return blocks
-        for path in sorted(self.folder.iterdir()):
-            match = _NAME.match(path.name)
-            if match and _readable(path):
-                blocks[int(match.group(1))] = path
-        return blocks
-
-    def done(self) -> set[int]:
-        """Ids of the blocks with a complete file; temporary leftovers are ignored
-        (and removed when their writer is dead)."""
-        if self.folder.is_dir():
+            return {}
+        with suppress(OSError):   # a read-only store keeps its leftovers
             remove_stale_temps(self.folder)
-        return set(self._complete())
+        found = (( _NAME.match(p.name), p) for p in sorted(self.folder.iterdir()))
+        return {int(m.group(1)): p for m, p in found if m}
 
-    def read(self) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
-        """Yield ``(block_id, payload)`` for every complete block, in id order."""
-        for block_id, path in self._complete().items():
-            with np.load(path, allow_pickle=False) as npz:
-                yield block_id, {k: npz[k] for k in npz.files}
+    def load(self, block_id: int, path: Path | None = None) -> dict[str, np.ndarray]:
+        """The verified payload of one block file; ``BadBlock`` saying why it cannot be
+        trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
+        path = self.path(block_id) if path is None else path
+        try:
+            with open(path, "rb") as f, np.load(f, allow_pickle=False) as npz:
+                arrays = {k: npz[k] for k in npz.files}
+        except Exception as err:  # noqa: BLE001 -- BadZipFile, zlib.error, OSError, ValueError...
+            raise BadBlock(f"unreadable ({_brief(err)})") from None
+        stored = arrays.pop(CHECKSUM, None)
+        if stored is None:
+            raise BadBlock("no checksum (written before ditherlab checked its journal, or by "
+                           "another program)")
+        if not np.array_equal(stored, checksum(block_id, arrays)):
+            raise BadBlock("checksum mismatch (the file changed after it was written)")
+        try:
+            return _checked(arrays, strict=True)
+        except ValueError as err:
+            raise BadBlock(_brief(err)) from None
+
+    def read(self, blocks: Sequence[np.ndarray] | None = None, repair: bool = True
+             ) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
+        """Yield ``(block_id, payload)`` for every verified block, in id order.
+
+        ``blocks`` (the plan's flat indices per block id) also refuses a block whose
+        points are not those of its id. A refused block is set aside (``set_aside``)
+        when ``repair``; without it (a reader that does not hold the sweep) it is only
+        skipped, silently: its writer will set it aside.
+        """
+        for block_id, path in self.files().items():
+            try:
+                payload = self.load(block_id, path)
+                if blocks is not None:
+                    _check_plan(block_id, payload["index"], blocks)
+            except BadBlock as err:
+                if repair:
+                    self.set_aside(block_id, str(err), path)
+                continue
+            yield block_id, payload
+
+    def done(self, blocks: Sequence[np.ndarray] | None = None) -> set[int]:
+        """Ids of the blocks with a verified file (bad ones are set aside)."""
+        return {block_id for block_id, _ in self.read(blocks)}
+
+    def set_aside(self, block_id: int, reason: str, path: Path | None = None) -> Path | None:
+        """Move a block file that cannot be trusted to ``journal/bad/`` (kept for a look,
+        never read again) with one ``JournalWarning``; its points will be recomputed.
+        Returns the new path, or None if it could not be moved (a read-only store)."""
+        path = self.path(block_id) if path is None else path
+        dest = self.folder / BAD_DIR / f"{path.name}.{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}"
+        try:
+            dest.parent.mkdir(exist_ok=True)
+            os.replace(path, dest)
+        except FileNotFoundError:   # another process set it aside first
+            return None
+        except OSError as err:
+            _warn(f"journal: block {block_id} ({path}) is bad: {reason}; it is ignored and "
+                  f"will be recomputed (could not move it aside: {err.strerror})")
+            return None
+        _warn(f"journal: block {block_id} is bad: {reason}; moved to {dest}, its points "
+              "will be recomputed")
+        return dest
 
 
-def _readable(path: Path) -> bool:
-    """True if ``path`` opens as an npz with the journal's fields; warns if not.
+def _check_plan(block_id: int, index: np.ndarray, blocks: Sequence[np.ndarray]) -> None:
+    if block_id >= len(blocks):
+        raise BadBlock(f"block id {block_id} is beyond this sweep's {len(blocks)} blocks")
+    if not np.array_equal(index, blocks[block_id]):
+        raise BadBlock(f"its points are not those of block {block_id} of this sweep")
 
-    Renamed files are complete by construction; this guards against a disk that
-    lied about fsync or a file someone truncated, so such a block is recomputed.
-    """
-    try:
-        with zipfile.ZipFile(path) as z:
-            names = {n.removesuffix(".npy") for n in z.namelist()}
-    except (OSError, zipfile.BadZipFile) as err:
-        warnings.warn(
-            f"journal: ignoring unreadable block file {path} ({err}); it will be recomputed"
-        )
-        return False
-    if not set(FIELDS) <= names:
-        warnings.warn(f"journal: ignoring {path}: fields {sorted(set(FIELDS) - names)} are missing")
-        return False
-    return True
+
+def _brief(err: BaseException, width: int = 160) -> str:
+    text = f"{type(err).__name__}: {err}".replace("\n", " ")
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _warn(message: str) -> None:
+    warnings.warn(message, JournalWarning, stacklevel=3)
 
 
 def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
@@ -176,13 +268,21 @@ def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
     )
 
 
-def rebuild(ds_empty: xr.Dataset, journal: Journal) -> xr.Dataset:
-    """A new cube: a deep copy of ``ds_empty`` with every journalled block filled in.
+def rebuild(ds_empty: xr.Dataset, journal: Journal, blocks: Sequence[np.ndarray] | None = None,
+            repair: bool = True) -> xr.Dataset:
+    """A new cube: a deep copy of ``ds_empty`` with every verified journal block filled in.
 
-    Blocks are applied in id order, so a point journalled twice keeps the later
-    block's result. ``ds_empty`` itself is not modified.
+    A block that does not fit the cube (outputs, shapes, index range, status codes;
+    with ``blocks``, the plan's points of its id) is set aside like a damaged one
+    (``Journal.read``; only skipped without ``repair``). Blocks are applied in id
+    order, so a point journalled twice keeps the later block's result. ``ds_empty``
+    itself is not modified.
     """
     ds = ds_empty.copy(deep=True)
-    for _, payload in journal.read():
-        fill_block(ds, payload)
+    for block_id, payload in journal.read(blocks, repair=repair):
+        try:
+            fill_block(ds, payload)   # checks everything before it writes anything
+        except ValueError as err:
+            if repair:
+                journal.set_aside(block_id, f"it does not fit the cube ({_brief(err)})")
     return ds

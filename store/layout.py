@@ -14,15 +14,56 @@ The store root defaults to ``$DITHERLAB_STORE`` or ``./ditherlab-store`` (DESIGN
 fsync it, ``os.replace`` it onto the final name, fsync the folder. A reader sees
 the old file or the new one, never a torn one; a writer killed before the rename
 leaves only a temporary file, which ``remove_stale_temps`` deletes later.
+
+Faults a user can meet are ``StoreError``s, each one line that says what to do:
+``NoSpaceError`` (disk full: checked before writing, and ENOSPC/EDQUOT while
+writing), ``check_store`` (a store path that is a file, a name too long, a
+read-only store asked to take writes). ``exit_status`` says which exit status the
+command line gives (README: 1 a run failed, 2 input refused).
 """
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
 from collections.abc import Callable
 from contextlib import suppress
 from pathlib import Path
+
+MB = 1 << 20
+SPACE_MARGIN = 64 << 10   # keep this much free beyond a write (file-system metadata, SQLite)
+
+
+class StoreError(Exception):
+    """A store problem told to the user as one line (no traceback)."""
+
+    exit_status = 1
+
+
+class StorePathError(StoreError):
+    """The store path itself is unusable (a file, a name too long): input refused."""
+
+    exit_status = 2
+
+
+class NoSpaceError(StoreError, OSError):
+    """Not enough free space to write ``path``; nothing was replaced.
+
+    ``needed`` and ``free`` are bytes (``needed`` may be 0 when the file system said
+    ENOSPC without a size known in advance).
+    """
+
+    def __init__(self, path, needed: int = 0, free: int | None = None):
+        self.path, self.needed = Path(path), int(needed)
+        self.free = free_bytes(self.path) if free is None else int(free)
+        short = max(self.needed + SPACE_MARGIN - self.free, MB // 10)
+        self.short_mb = short / MB
+        super().__init__(errno.ENOSPC, f"no space left on device writing {self.path}: "
+                         f"free {self.short_mb:.1f} MB and submit again")
+
+    def __str__(self) -> str:
+        return self.strerror
 
 CATALOGUE_NAME = "catalogue.sqlite"
 CUBE_NAME = "cube.h5"
@@ -116,35 +157,109 @@ def fsync_file(path: Path) -> None:
         os.close(fd)
 
 
-def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
-    """Create ``path`` atomically: ``write(tmp)``, fsync, rename, fsync the folder.
+def atomic_write(path: Path, write: Callable[[Path], None] | bytes | memoryview) -> Path:
+    """Create ``path`` atomically: write a temporary file, fsync, rename, fsync the folder.
 
     Parameters
     ----------
     path
         Final file name; its folder is created if missing.
     write
-        Called with the temporary path; must create and close that file.
+        The file's bytes, or a function called with the temporary path that must
+        create and close that file. Given bytes, free space is checked first.
 
     Returns
     -------
     Path
-        ``path``. If ``write`` raises, the temporary file is removed and the old
-        ``path`` (if any) is untouched.
+        ``path``. If the write fails, the temporary file is removed and the old
+        ``path`` (if any) is untouched; a full disk raises ``NoSpaceError``.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    if not callable(write):
+        data = write
+        ensure_space(path, len(data))
+        write = lambda tmp: tmp.write_bytes(data)  # noqa: E731
     tmp = temp_name(path)
     try:
         write(tmp)
         fsync_file(tmp)
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as err:
         with suppress(OSError):
             tmp.unlink()
+        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT) \
+                and not isinstance(err, NoSpaceError):
+            raise NoSpaceError(path) from err
         raise
     fsync_dir(path.parent)
     return path
+
+
+def free_bytes(path) -> int:
+    """Bytes free to an unprivileged writer on the file system holding ``path`` (or its
+    nearest existing parent)."""
+    path = Path(path).absolute()
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    st = os.statvfs(path)
+    return st.f_bavail * st.f_frsize
+
+
+def ensure_space(path, needed: int) -> None:
+    """Raise ``NoSpaceError`` unless ``needed`` bytes (plus ``SPACE_MARGIN``) are free
+    where ``path`` lives; called before writing, so nothing is torn or replaced."""
+    free = free_bytes(path)
+    if free < needed + SPACE_MARGIN:
+        raise NoSpaceError(path, needed, free)
+
+
+def check_store(root, write: bool) -> Path:
+    """The store folder ``root`` checked for use, as a ``Path``.
+
+    A path that is not a folder (or has a component too long) raises
+    ``StorePathError``. With ``write``, the folder is created if missing and a probe
+    file is written and removed: a read-only store raises ``StoreError`` saying that
+    read commands still work; a full one ``NoSpaceError``.
+    """
+    root = Path(root)
+    try:
+        exists = root.exists()
+        if exists and not root.is_dir():
+            raise StorePathError(f"store path {root} is not a folder; pass --store DIR "
+                                 "(or set $DITHERLAB_STORE) naming a folder")
+    except OSError as err:   # ENAMETOOLONG, ELOOP, EACCES on a parent
+        raise StorePathError(f"store path {_short(root)} cannot be used: "
+                             f"{err.strerror}") from None
+    if not write:
+        return root
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+        probe = temp_name(root / ".write-probe")
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as err:
+        if err.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise NoSpaceError(root) from None
+        if err.errno in (errno.EROFS, errno.EACCES, errno.EPERM):
+            raise StoreError(f"store {root} is read-only ({err.strerror}): cannot write "
+                             "there; status, query and map still read it") from None
+        if err.errno in (errno.ENOTDIR, errno.ENAMETOOLONG, errno.EEXIST):
+            raise StorePathError(f"store path {_short(root)} cannot be used: "
+                                 f"{err.strerror}") from None
+        raise StoreError(f"cannot write to store {root}: {err.strerror}") from None
+    return root
+
+
+def writable(folder) -> bool:
+    """True if this process may create files in the existing folder ``folder``
+    (``access(2)``: false on a read-only mount, even for root; no side effects)."""
+    return os.access(folder, os.W_OK | os.X_OK)
+
+
+def _short(path: Path, width: int = 80) -> str:
+    text = str(path)
+    return text if len(text) <= width else f"{text[:width // 2]}...{text[-width // 2:]}"
 
 
 def _pid_alive(pid: int) -> bool:

@@ -1,6 +1,7 @@
 """Atomic publish (DESIGN.md §4): a reader sees the old cube or the new one, never a torn
 file, even when the writer is killed with SIGKILL in the middle of an HDF5 write."""
 
+import errno
 import os
 import signal
 import subprocess
@@ -15,7 +16,8 @@ from storetest_cubes import block_arrays, make_cube
 from storetest_writer import noise
 
 import store
-from store.layout import temp_name
+from store import layout
+from store.layout import NoSpaceError, temp_name
 
 HERE = Path(__file__).parent
 N_BIG = 600  # 600 x 600 points, two outputs: ~3 MB of zlib-resistant data, ~0.25 s a publish
@@ -54,13 +56,26 @@ def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatc
     path = store.publish(cube, tmp_path / "cube.h5")
     before = path.read_bytes()
 
-    def broken(self, target, **kw):
-        Path(target).write_bytes(b"half a file")
-        raise OSError("disk full (simulated)")
+    def full(self, data):   # the disk fills up half-way through the temporary file
+        with open(self, "wb") as f:
+            f.write(bytes(data)[:100])
+        raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(xr.Dataset, "to_netcdf", broken)
-    with pytest.raises(OSError, match="disk full"):
+    monkeypatch.setattr(Path, "write_bytes", full)
+    with pytest.raises(NoSpaceError, match=r"no space left on device writing .*cube.h5: "
+                       r"free \d+\.\d MB and submit again"):
         store.publish(make_cube(), path)
+    monkeypatch.undo()
+    assert path.read_bytes() == before and _temps(tmp_path) == []
+
+
+def test_publish_checks_free_space_before_writing(cube, tmp_path, monkeypatch):
+    path = store.publish(cube, tmp_path / "cube.h5")
+    before = path.read_bytes()
+    monkeypatch.setattr(layout, "free_bytes", lambda p: 10_000)
+    with pytest.raises(NoSpaceError) as err:
+        store.publish(make_cube(), path)
+    assert err.value.free == 10_000 and err.value.needed > 10_000
     assert path.read_bytes() == before and _temps(tmp_path) == []
 
 
