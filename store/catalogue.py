@@ -38,7 +38,7 @@ import xarray as xr
 
 from . import attrs as A
 from .cube import FAILED, NON_FINITE, NOT_COMPUTED
-from .layout import CATALOGUE_NAME, CUBE_NAME
+from .layout import CATALOGUE_NAME, CUBE_NAME, NoSpaceError, StoreError, check_store, writable
 
 STATES = ("queued", "running", "partial", "done", "failed")
 UPDATABLE = ("state", "done_points", "failed_points", "done_blocks", "n_blocks", "message", "path",
@@ -108,16 +108,25 @@ class Catalogue:
         The store folder; the database is ``<store_root>/catalogue.sqlite``.
     timeout_s
         How long a call waits for another process's write lock before failing.
+    readonly
+        Read a snapshot of the catalogue copied into memory and never write the store
+        (writes go to the copy). Default: when the store folder exists but is not
+        writable (a read-only mount), so ``status``, ``query`` and ``map`` work there.
+        A damaged catalogue raises ``store.layout.StoreError`` saying what to do.
     """
 
-    def __init__(self, store_root, timeout_s: float = 30.0):
+    def __init__(self, store_root, timeout_s: float = 30.0, readonly: bool | None = None):
         self.root = Path(store_root)
         self.path = self.root / CATALOGUE_NAME
         self.timeout_s = float(timeout_s)
         self._con: sqlite3.Connection | None = None
         self._pid = os.getpid()
         self._lock = threading.RLock()
-        self.root.mkdir(parents=True, exist_ok=True)
+        check_store(self.root, write=False)
+        self.readonly = (self.root.is_dir() and not writable(self.root)) if readonly is None \
+            else bool(readonly)
+        if not self.readonly:
+            check_store(self.root, write=True)
         with self._connection() as con:
             con.execute("PRAGMA journal_mode=WAL")
             con.execute(_SCHEMA)
@@ -155,9 +164,13 @@ class Catalogue:
             yield self._con
 
     def _connect(self) -> sqlite3.Connection:
-        con = sqlite3.connect(
-            self.path, timeout=self.timeout_s, isolation_level=None, check_same_thread=False
-        )
+        if self.readonly:
+            con = _snapshot(self.path)
+        else:
+            con = sqlite3.connect(
+                self.path, timeout=self.timeout_s, isolation_level=None, check_same_thread=False
+            )
+            _check_readable(con, self.path)
         con.row_factory = sqlite3.Row
         con.execute(f"PRAGMA busy_timeout={int(self.timeout_s * 1000)}")
         # WAL + NORMAL: a commit survives a killed process (not a power cut) and costs no
@@ -294,6 +307,46 @@ class Catalogue:
                     con.execute(_ADOPT, row)
                 added.append(row["sweep_id"])
         return added
+
+
+def _check_readable(con: sqlite3.Connection, path: Path) -> None:
+    """Read the schema once, so that a damaged or unopenable file fails here, as one line."""
+    try:
+        con.execute("SELECT count(*) FROM sqlite_master").fetchone()
+    except sqlite3.DatabaseError as err:
+        con.close()
+        if "full" in str(err):
+            raise NoSpaceError(path) from None
+        if isinstance(err, sqlite3.OperationalError):   # locked, a folder, no permission
+            raise StoreError(f"cannot open the catalogue {path}: {err}") from None
+        raise StoreError(
+            f"the catalogue {path} is damaged ({err}); move it aside (mv {path} "
+            f"{path}.damaged) and run the command again: it is rebuilt from the cubes "
+            "(queued sweeps must be submitted again)") from None
+
+
+def _snapshot(path: Path) -> sqlite3.Connection:
+    """The catalogue of a read-only store, copied into memory: reads see it as on disk,
+    writes (adopting cubes, migrations) stay in memory, nothing touches the store."""
+    mem = sqlite3.connect(":memory:", isolation_level=None, check_same_thread=False)
+    if not path.exists():
+        return mem
+    uri = path.absolute().as_uri()
+    for mode in ("mode=ro", "immutable=1"):   # immutable: when no -shm can be made beside it
+        src = None
+        try:
+            src = sqlite3.connect(f"{uri}?{mode}", uri=True)
+            src.execute("SELECT count(*) FROM sqlite_master").fetchone()
+            src.backup(mem)
+            return mem
+        except sqlite3.OperationalError:
+            continue
+        except sqlite3.DatabaseError:
+            _check_readable(src, path)   # raises the one-line "damaged" error
+        finally:
+            if src is not None:
+                src.close()
+    raise StoreError(f"cannot read the catalogue {path} of a read-only store")
 
 
 def _count(name: str, value) -> int:
