@@ -14,16 +14,19 @@ import argparse
 import json
 import os
 import sys
+from contextlib import contextmanager
 from pathlib import Path
 
 from . import history
 from .spec import DEFAULT_MAX_POINTS, SpecError, load_spec
 
-EXIT_FAILED, EXIT_REFUSED = 1, 2
+EXIT_FAILED, EXIT_REFUSED, EXIT_INTERRUPTED = 1, 2, 130
 
 
 class UserError(Exception):
     """A lookup or argument problem, reported as one line without a traceback."""
+
+    exit_status = EXIT_FAILED
 
 
 def store_root(arg: str | None) -> Path:
@@ -122,6 +125,8 @@ def _warn_stale(root: Path, sweep_id: str, ds) -> None:
 # --- commands --------------------------------------------------------------------------
 
 def cmd_submit(args) -> int:
+    import store
+
     from .plan import make_plan
     from .run import submit
 
@@ -130,12 +135,29 @@ def cmd_submit(args) -> int:
     root = store_root(args.store)
     print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
           f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
-    res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
-                 progress=not args.quiet)
+    try:
+        res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
+                     progress=not args.quiet)
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted; {_kept(plan, root)}; "
+                          "submit the spec again to resume") from None
+    except store.layout.NoSpaceError as exc:
+        raise UserError(f"{exc}; {_kept(plan, root)}") from None
     verb = "already complete" if res.blocks_run == 0 else f"ran {res.blocks_run} blocks"
     print(f"{res.sweep_id}: {res.state}, {verb}; {res.n_ok}/{res.n_points} ok, "
           f"{res.n_failed} failed; {res.wall_s:.1f} s\ncube: {res.cube_path}")
     return 0 if res.state == "done" else EXIT_FAILED
+
+
+def _kept(plan, root: Path) -> str:
+    """What a stopped submit kept: ``the journal keeps the N finished blocks (of M)``."""
+    import store
+
+    try:
+        n = len(store.Journal(store.SweepDir(root, plan.sweep_id).journal).files())
+    except OSError:
+        return "the journal keeps its finished blocks"
+    return f"the journal keeps the {n} finished blocks (of {len(plan.blocks)})"
 
 
 def cmd_status(args) -> int:
@@ -317,18 +339,83 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; every fault ends in one line on stderr and the exit status of the
+    README (0 ok, 1 failed, 2 refused, 130 interrupted), never a traceback
+    (``DITHERLAB_DEBUG=1`` shows the traceback of an unexpected error)."""
     args = build_parser().parse_args(argv)
     if getattr(args, "workers", 1) is not None and getattr(args, "workers", 1) < 1:
         print("ditherlab: --workers must be >= 1", file=sys.stderr)
         return EXIT_REFUSED
+    with _one_line_warnings():
+        try:
+            return args.func(args)
+        except SpecError as exc:
+            return _fail(exc, EXIT_REFUSED)
+        except (UserError, Interrupted) as exc:
+            return _fail(exc, exc.exit_status)
+        except KeyboardInterrupt:
+            return _fail("interrupted", EXIT_INTERRUPTED)
+        except Exception as exc:  # noqa: BLE001 -- the one-line promise (README)
+            return _fail_unexpected(exc)
+
+
+class Interrupted(Exception):
+    """Ctrl-C, told with what was kept and how to resume."""
+
+    exit_status = EXIT_INTERRUPTED
+
+
+def _fail(message, status: int) -> int:
+    print(f"ditherlab: {message}", file=sys.stderr)
+    return status
+
+
+def _fail_unexpected(exc: Exception) -> int:
+    """Store faults (disk full, read-only, damaged files), OS and SQLite errors, and bugs:
+    one line each."""
+    import sqlite3
+
+    import store
+
+    if os.environ.get("DITHERLAB_DEBUG"):
+        raise exc
+    if isinstance(exc, store.layout.StoreError):
+        return _fail(exc, exc.exit_status)
+    if isinstance(exc, OSError):
+        where = f" ({exc.filename})" if exc.filename else ""
+        return _fail(f"{exc.strerror or exc}{where}", EXIT_FAILED)
+    if isinstance(exc, sqlite3.Error):
+        if "full" in str(exc):   # SQLite's "database or disk is full"
+            return _fail(f"no space left on device writing the catalogue ({exc}): free "
+                         "some space and run the command again", EXIT_FAILED)
+        return _fail(f"catalogue error: {exc}", EXIT_FAILED)
+    text = f"{type(exc).__name__}: {exc}".replace("\n", " ")
+    return _fail(f"internal error: {text[:300]} (DITHERLAB_DEBUG=1 shows the traceback)",
+                 EXIT_FAILED)
+
+
+@contextmanager
+def _one_line_warnings():
+    """Warnings (a journal block set aside, a busy port) and log records as
+    ``ditherlab: warning: ...`` lines."""
+    import logging
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = str(message).replace("\n", " ")
+        print(f"ditherlab: warning: {text}", file=file or sys.stderr)
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("ditherlab: warning: %(message)s"))
+    logger = logging.getLogger("ditherlab")
+    saved = warnings.showwarning
+    warnings.showwarning = show
+    logger.addHandler(handler)
     try:
-        return args.func(args)
-    except SpecError as exc:
-        print(f"ditherlab: {exc}", file=sys.stderr)
-        return EXIT_REFUSED
-    except UserError as exc:
-        print(f"ditherlab: {exc}", file=sys.stderr)
-        return EXIT_FAILED
+        yield
+    finally:
+        warnings.showwarning = saved
+        logger.removeHandler(handler)
 
 
 if __name__ == "__main__":
