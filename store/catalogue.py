@@ -10,16 +10,32 @@ The cubes are the truth and the catalogue an index: a cube folder without a row
 its row back from the cube's attributes on the next ``list``/``find``/``get``.
 
 Counts: ``done_points`` have a final status (ok, failed or non-finite),
-``failed_points`` are those of them that failed or went non-finite.
+``failed_points`` are those of them that failed or went non-finite, ``done_blocks``
+the blocks in the sweep's journal (of ``n_blocks``).
 
-States: ``queued`` (registered, nothing run), ``running``, ``partial`` (stopped
-with points still to compute), ``done`` (every point has a final status, maybe
-failed ones), ``failed`` (the run itself aborted).
+States (DESIGN.md §5), changed only inside transactions (``BEGIN IMMEDIATE``):
 
-A ``running`` row names its submitting process in ``owner`` (``host:pid``). A submitter
-that was killed cannot update its row, so readers ask :meth:`Catalogue.live_state`: a
-``running`` row whose owner is on this host and no longer exists reads ``stalled``
-(resubmitting the spec resumes it from the journal). Owners on other hosts are trusted.
+==========  ==============================================================
+queued      waiting for ``ditherlab serve`` (``submit --detach``)
+running     one process holds the sweep's lease (``owner``, ``heartbeat``)
+done        every point computed ok
+partial     the run finished, some points failed or went non-finite
+failed      the run itself crashed; ``message`` holds the error
+cancelled   stopped before finishing (``ditherlab cancel``, Ctrl-C); the
+            journal is kept and submitting again resumes
+==========  ==============================================================
+
+One writer per sweep: a process computes blocks only while it holds the sweep's
+lease, taken by :meth:`Catalogue.acquire` (or :meth:`Catalogue.claim_next` for
+``serve``) in one transaction, kept alive by :meth:`Catalogue.beat` and given back
+by :meth:`Catalogue.finish`. A second submitter finds the lease held and attaches
+(sweeps.service). A holder that died cannot give it back, so readers ask
+:meth:`Catalogue.live_state`: a ``running`` row reads ``stalled`` when its owner
+(``host:pid``) is a process of this host that no longer exists, or its heartbeat is
+older than ``STALE_S`` seconds (owners on other hosts are judged by the heartbeat
+alone). A stalled sweep can be taken over; resubmitting resumes it from the journal.
+
+The ``servers`` table lists running ``ditherlab serve`` processes and their heartbeat.
 """
 
 from __future__ import annotations
@@ -28,6 +44,7 @@ import os
 import socket
 import sqlite3
 import threading
+import time
 import warnings
 from contextlib import contextmanager
 from datetime import datetime, timezone
@@ -40,10 +57,13 @@ from . import attrs as A
 from .cube import FAILED, NON_FINITE, NOT_COMPUTED
 from .layout import CATALOGUE_NAME, CUBE_NAME, NoSpaceError, StoreError, check_store, writable
 
-STATES = ("queued", "running", "partial", "done", "failed")
+STATES = ("queued", "running", "done", "partial", "failed", "cancelled")
+FINAL = ("done", "partial", "failed", "cancelled")   # nobody works on the sweep
 UPDATABLE = ("state", "done_points", "failed_points", "done_blocks", "n_blocks", "message", "path",
-             "owner")
+             "owner", "heartbeat", "cancel_requested", "run_started", "run_start_blocks")
 STALLED = "stalled"   # derived, never stored: running, but its submitter is gone
+HEARTBEAT_S = 5.0     # a lease holder (and serve) beats this often
+STALE_S = float(os.environ.get("DITHERLAB_STALE_S") or 60.0)   # silent longer: gone
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS sweeps (
     sweep_id      TEXT PRIMARY KEY,
@@ -61,15 +81,40 @@ CREATE TABLE IF NOT EXISTS sweeps (
     updated       TEXT NOT NULL,
     owner         TEXT NOT NULL DEFAULT ''
 )"""
+# columns added after the first catalogues were written: old ones gain them on open
+_ADDED_COLUMNS = (
+    ("owner", "TEXT NOT NULL DEFAULT ''"),           # host:pid of the lease holder
+    ("heartbeat", "REAL NOT NULL DEFAULT 0"),        # its last sign of life (epoch s)
+    ("cancel_requested", "INTEGER NOT NULL DEFAULT 0"),
+    ("run_started", "REAL NOT NULL DEFAULT 0"),      # when blocks began to flow (ETA)
+    ("run_start_blocks", "INTEGER NOT NULL DEFAULT 0"),   # done_blocks at that instant
+    ("queued_at", "TEXT NOT NULL DEFAULT ''"),       # serve runs the oldest first
+    ("engine_fingerprint", "TEXT NOT NULL DEFAULT ''"),   # engine that computes it ('' unknown)
+)
+_SERVERS = """
+CREATE TABLE IF NOT EXISTS servers (
+    owner     TEXT PRIMARY KEY,
+    started   TEXT NOT NULL,
+    heartbeat REAL NOT NULL,
+    sweep_id  TEXT NOT NULL DEFAULT '',
+    cluster   TEXT NOT NULL DEFAULT ''
+)"""
 _UPSERT = """
 INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_points,
-                    failed_points, done_blocks, path, created, updated, engine_fingerprint)
+                    failed_points, done_blocks, path, created, updated, queued_at,
+                    engine_fingerprint)
 VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points,
-        :failed_points, :done_blocks, :path, :created, :updated, :engine_fingerprint)
+        :failed_points, :done_blocks, :path, :created, :updated, :created, :engine_fingerprint)
 ON CONFLICT(sweep_id) DO UPDATE SET name = excluded.name, spec_json = excluded.spec_json,
     n_points = excluded.n_points, n_blocks = excluded.n_blocks, path = excluded.path,
     updated = excluded.updated, engine_fingerprint = excluded.engine_fingerprint"""
-_ADOPT = _UPSERT.split(" ON CONFLICT")[0] + " ON CONFLICT(sweep_id) DO NOTHING"
+_ADOPT = """
+INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_points,
+                    failed_points, done_blocks, path, message, created, updated,
+                    engine_fingerprint)
+VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points,
+        :failed_points, :done_blocks, :path, :message, :created, :updated, :engine_fingerprint)
+ON CONFLICT(sweep_id) DO NOTHING"""
 
 
 def owner_tag() -> str:
@@ -130,12 +175,13 @@ class Catalogue:
         with self._connection() as con:
             con.execute("PRAGMA journal_mode=WAL")
             con.execute(_SCHEMA)
+            con.execute(_SERVERS)
             columns = {row["name"] for row in con.execute("PRAGMA table_info(sweeps)")}
-            for name in ("owner", "engine_fingerprint"):   # added after the first catalogues
+            for name, decl in _ADDED_COLUMNS:   # a catalogue written before they existed
                 if name in columns:
                     continue
                 try:
-                    con.execute(f"ALTER TABLE sweeps ADD COLUMN {name} TEXT NOT NULL DEFAULT ''")
+                    con.execute(f"ALTER TABLE sweeps ADD COLUMN {name} {decl}")
                 except sqlite3.OperationalError as err:   # another process added it first
                     if "duplicate column" not in str(err):
                         raise
@@ -230,7 +276,8 @@ class Catalogue:
             raise ValueError(
                 f"Catalogue.update: state must be one of {STATES}, got {fields['state']!r}"
             )
-        for key in ("done_points", "failed_points", "done_blocks", "n_blocks"):
+        for key in ("done_points", "failed_points", "done_blocks", "n_blocks",
+                    "cancel_requested", "run_start_blocks"):
             if key in fields:
                 fields[key] = _count(key, fields[key])
         fields["updated"] = _now()
@@ -245,12 +292,183 @@ class Catalogue:
         return self.get(sweep_id)
 
     @staticmethod
-    def live_state(row: dict) -> str:
-        """The row's state, except ``stalled`` for a ``running`` row whose submitting
-        process (``owner``, on this host) is gone."""
-        if row["state"] == "running" and row.get("owner") and not _owner_alive(row["owner"]):
+    def alive(row: dict, now: float | None = None) -> bool:
+        """True while the row's ``owner`` holds a live lease: its process exists (when on
+        this host) and its heartbeat, if it ever beat, is younger than ``STALE_S``."""
+        owner = row.get("owner") or ""
+        if not owner or not _owner_alive(owner):
+            return False
+        beat = float(row.get("heartbeat") or 0.0)
+        return not beat or (time.time() if now is None else now) - beat <= STALE_S
+
+    @classmethod
+    def live_state(cls, row: dict) -> str:
+        """The row's state, except ``stalled`` for a ``running`` row whose owner is gone
+        (see :meth:`alive`)."""
+        if row["state"] == "running" and row.get("owner") and not cls.alive(row):
             return STALLED
         return row["state"]
+
+    # --- the lease: one writer per sweep, every state change in one transaction ------
+
+    @contextmanager
+    def _transaction(self):
+        """``BEGIN IMMEDIATE`` ... ``COMMIT`` on this object's connection: the write lock
+        is taken before the first read, so a read-decide-write cannot interleave with
+        another process's."""
+        with self._connection() as con:
+            con.execute("BEGIN IMMEDIATE")
+            try:
+                yield con
+            except BaseException:
+                con.execute("ROLLBACK")
+                raise
+            con.execute("COMMIT")
+
+    @staticmethod
+    def _row(con, sweep_id: str) -> dict:
+        row = con.execute("SELECT * FROM sweeps WHERE sweep_id = ?", (sweep_id,)).fetchone()
+        if row is None:
+            raise LookupError(f"no sweep with id {sweep_id!r}; register it first")
+        return dict(row)
+
+    @staticmethod
+    def _set(con, sweep_id: str, **fields) -> None:
+        fields["updated"] = _now()
+        assignments = ", ".join(f"{k} = :{k}" for k in fields)
+        con.execute(f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id",
+                    {**fields, "_id": sweep_id})
+
+    def _take(self, con, sweep_id: str, owner: str, row: dict) -> dict:
+        now = time.time()
+        self._set(con, sweep_id, state="running", owner=owner, heartbeat=now,
+                  cancel_requested=0, message="", run_started=0.0,
+                  run_start_blocks=row["done_blocks"])
+        return self._row(con, sweep_id)
+
+    def acquire(self, sweep_id: str, owner: str | None = None) -> tuple[bool, dict]:
+        """Take the lease of a registered sweep: ``(True, row)`` with the row now
+        ``running`` under ``owner`` (default: this process), or ``(False, row)`` when
+        another owner holds it alive. A stalled holder's lease is taken over."""
+        owner = owner or owner_tag()
+        with self._transaction() as con:
+            row = self._row(con, sweep_id)
+            if row["state"] == "running" and row["owner"] != owner and self.alive(row):
+                return False, row
+            return True, self._take(con, sweep_id, owner, row)
+
+    def claim_next(self, owner: str | None = None) -> dict | None:
+        """For ``serve``: the oldest ``queued`` sweep, now ``running`` under ``owner``;
+        ``None`` when the queue is empty. Two servers never claim the same sweep."""
+        owner = owner or owner_tag()
+        with self._transaction() as con:
+            row = con.execute("SELECT * FROM sweeps WHERE state = 'queued' "
+                              "ORDER BY queued_at, created, sweep_id LIMIT 1").fetchone()
+            return None if row is None else self._take(con, row["sweep_id"], owner, dict(row))
+
+    def beat(self, sweep_id: str, owner: str | None = None, **counts) -> bool:
+        """The lease holder's heartbeat, with progress counts if given (``done_points``,
+        ``failed_points``, ``done_blocks``, ``run_started``, ``run_start_blocks``).
+        False when ``owner`` no longer holds the lease: it must stop computing."""
+        unknown = sorted(set(counts) - {"done_points", "failed_points", "done_blocks",
+                                        "run_started", "run_start_blocks"})
+        if unknown:
+            raise ValueError(f"Catalogue.beat: unknown field(s) {unknown}")
+        fields = {"heartbeat": time.time(), **counts}
+        assignments = ", ".join(f"{k} = :{k}" for k in fields)
+        with self._connection() as con:
+            cur = con.execute(
+                f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id AND owner = :_owner "
+                "AND state = 'running'", {**fields, "_id": sweep_id, "_owner": owner or owner_tag()})
+        return cur.rowcount == 1
+
+    def cancel_requested(self, sweep_id: str) -> bool:
+        """True once ``ditherlab cancel`` asked the running sweep to stop."""
+        rows = self._query("SELECT cancel_requested FROM sweeps WHERE sweep_id = ?", (sweep_id,))
+        return bool(rows and rows[0]["cancel_requested"])
+
+    def finish(self, sweep_id: str, state: str, *, owner: str | None = None, message: str = "",
+               **counts) -> tuple[bool, dict]:
+        """End a run: set ``state`` (not ``running``), ``message`` and counts, and give the
+        lease back. With ``owner``: only if that owner still holds the lease. Without:
+        only if no live owner holds it (a submitter that found nothing to compute).
+        Returns ``(changed, row)``."""
+        if state not in STATES or state == "running":
+            raise ValueError(f"Catalogue.finish: state must be one of {STATES[:1] + FINAL}, "
+                             f"got {state!r}")
+        counts = {k: _count(k, v) for k, v in counts.items()
+                  if k in ("done_points", "failed_points", "done_blocks")}
+        with self._transaction() as con:
+            row = self._row(con, sweep_id)
+            held = row["state"] == "running" and bool(row["owner"])
+            if owner is not None and (not held or row["owner"] != owner):
+                return False, row
+            if owner is None and held and self.alive(row):
+                return False, row
+            self._set(con, sweep_id, state=state, owner="", message=str(message),
+                      cancel_requested=0, **counts)
+            return True, self._row(con, sweep_id)
+
+    def enqueue(self, sweep_id: str) -> dict:
+        """``submit --detach``: queue a registered sweep for ``serve``. A sweep that is
+        running (live) or done is left as it is; any other (new, partial, failed,
+        cancelled, stalled) is queued. Returns the row."""
+        with self._transaction() as con:
+            row = self._row(con, sweep_id)
+            if row["state"] == "done" or (row["state"] == "running" and self.alive(row)):
+                return row
+            if row["state"] != "queued":
+                self._set(con, sweep_id, state="queued", owner="", heartbeat=0.0, message="",
+                          cancel_requested=0, queued_at=_now())
+            return self._row(con, sweep_id)
+
+    def requeue(self, sweep_id: str, owner: str, message: str = "", **counts) -> bool:
+        """A lease holder puts its sweep back in the queue (``serve`` stopping)."""
+        with self._transaction() as con:
+            row = self._row(con, sweep_id)
+            if row["state"] != "running" or row["owner"] != owner:
+                return False
+            counts = {k: _count(k, v) for k, v in counts.items()
+                      if k in ("done_points", "failed_points", "done_blocks")}
+            self._set(con, sweep_id, state="queued", owner="", heartbeat=0.0,
+                      message=str(message), cancel_requested=0, **counts)
+            return True
+
+    def request_cancel(self, sweep_id: str) -> dict:
+        """``ditherlab cancel``: a queued (or stalled) sweep becomes ``cancelled`` at once;
+        a running one is flagged and its runner stops after its in-flight blocks; a
+        finished one is left alone. Returns the row."""
+        with self._transaction() as con:
+            row = self._row(con, sweep_id)
+            if row["state"] == "queued":
+                self._set(con, sweep_id, state="cancelled", message="cancelled while queued")
+            elif row["state"] == "running" and not self.alive(row):
+                self._set(con, sweep_id, state="cancelled", owner="", message=(
+                    f"cancelled after its runner ({row['owner']}) was gone"))
+            elif row["state"] == "running":
+                self._set(con, sweep_id, cancel_requested=1)
+            return self._row(con, sweep_id)
+
+    # --- serve processes ---------------------------------------------------------------
+
+    def server_beat(self, owner: str | None = None, sweep_id: str = "", cluster: str = "") -> None:
+        """Register or refresh a ``serve`` process (and the sweep it is running)."""
+        with self._connection() as con:
+            con.execute(
+                "INSERT INTO servers (owner, started, heartbeat, sweep_id, cluster) "
+                "VALUES (?, ?, ?, ?, ?) ON CONFLICT(owner) DO UPDATE SET "
+                "heartbeat = excluded.heartbeat, sweep_id = excluded.sweep_id, "
+                "cluster = excluded.cluster",
+                (owner or owner_tag(), _now(), time.time(), sweep_id, cluster))
+
+    def server_gone(self, owner: str | None = None) -> None:
+        with self._connection() as con:
+            con.execute("DELETE FROM servers WHERE owner = ?", (owner or owner_tag(),))
+
+    def servers(self) -> list[dict]:
+        """The ``serve`` processes that are alive (dead ones are left in the table)."""
+        rows = self._query("SELECT * FROM servers ORDER BY started")
+        return [r for r in rows if self.alive(r)]
 
     def get(self, sweep_id: str) -> dict:
         """The row of ``sweep_id`` (exact id), as a dict; ``LookupError`` if unknown."""
@@ -371,10 +589,16 @@ def _row_from_cube(cube: Path) -> dict | None:
         or datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat()
     )
     spec = attrs.get(A.SPEC, "{}")
+    if pending:
+        state, message = "cancelled", (f"found as a cube with {pending} points not computed; "
+                                       "submit the spec again to resume")
+    else:
+        state, message = ("partial" if failed else "done"), ""
     return dict(
         sweep_id=cube.parent.name,
         name=str(attrs.get(A.NAME, cube.parent.name)),
-        state="partial" if pending else "done",
+        state=state,
+        message=message,
         spec_json=spec if isinstance(spec, str) else A.canonical_json(spec),
         n_points=int(status.size),
         n_blocks=0,

@@ -71,7 +71,8 @@ def test_find_by_id_name_and_prefix(tmp_path):
         (
             dict(state="finished"),
             ValueError,
-            r"state must be one of \('queued', 'running', 'partial', 'done', 'failed'\)",
+            r"state must be one of \('queued', 'running', 'done', 'partial', 'failed', "
+            r"'cancelled'\)",
         ),
         (dict(done_points=-1), ValueError, r"done_points must be a non-negative integer, got -1"),
     ],
@@ -100,11 +101,13 @@ def test_cube_without_row_is_adopted(tmp_path):
     (tmp_path / "not-a-sweep").mkdir()
     cat = store.Catalogue(tmp_path)
     row = cat.find("orphan")
+    # points never computed: it stopped before finishing, submitting again resumes it
     assert (row["sweep_id"], row["state"], row["spec_json"]) == (
         "feed01",
-        "partial",
+        "cancelled",
         '{"name":"orphan"}',
     )
+    assert "3 points not computed" in row["message"]
     assert row["path"] == str(tmp_path / "feed01")
     assert (row["n_points"], row["done_points"], row["failed_points"]) == (
         status.size,
