@@ -368,7 +368,8 @@ def open_cube(path) -> xr.Dataset:
 
 def disagreement(path, ds: xr.Dataset) -> str | None:
     """``None`` if the published cube at ``path`` holds exactly ``ds`` (every variable
-    and coordinate, and the attributes but ``created``), else why not, in a few words."""
+    and coordinate, and ``ds``'s attributes but ``created``; attributes only the file has
+    are kept), else why not, in a few words."""
     try:
         pub = open_cube(path)
     except FileNotFoundError:
@@ -380,8 +381,8 @@ def disagreement(path, ds: xr.Dataset) -> str | None:
     for name, var in ds.variables.items():
         if not var.equals(pub.variables[name]):
             return f"the cube's {name} differs from the journal's"
-    attrs = [A.canonical_json(A.encode({k: v for k, v in d.attrs.items() if k != A.CREATED}))
-             for d in (ds, pub)]
+    keys = [k for k in ds.attrs if k != A.CREATED]
+    attrs = [A.canonical_json(A.encode({k: d.attrs.get(k) for k in keys})) for d in (ds, pub)]
     if attrs[0] != attrs[1]:
         return "the cube's attributes differ from the journal's"
     return None

@@ -120,3 +120,26 @@ def test_sigkill_mid_publish_leaves_previous_generation(tmp_path, fraction):
     np.testing.assert_array_equal(ds["a"].values, noise(N_BIG) + last_done)
     store.publish(ds, path)
     assert _temps(path.parent) == []
+
+
+def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, tmp_path):
+    """What submit compares before it trusts a published cube (issue 10)."""
+    from store.cube import disagreement
+
+    path = store.publish(cube, tmp_path / "cube.h5")
+    assert disagreement(path, cube) is None
+    assert disagreement(tmp_path / "none.h5", cube) == "the cube is missing"
+    filled = cube.copy(deep=True)
+    store.fill(filled, np.arange(4), **block_arrays(cube, np.arange(4)))
+    assert disagreement(path, filled) == "the cube's F_mean differs from the journal's"
+    estimated = cube.copy()
+    estimated.attrs["error_estimate"] = "{}"
+    assert disagreement(path, estimated) == "the cube's attributes differ from the journal's"
+    store.publish(estimated, path)
+    assert disagreement(path, cube) is None   # attributes only the file has are kept
+    path.write_bytes(path.read_bytes()[:3000])
+    assert disagreement(path, cube).startswith("the cube is unreadable (")
+    later = cube.copy()
+    later.attrs["created"] = "2099-01-01T00:00:00+00:00"
+    store.publish(later, path)
+    assert disagreement(path, cube) is None   # the creation time is not compared
