@@ -1,7 +1,9 @@
 """The ``ditherlab`` command line (DESIGN.md §5).
 
-    ditherlab submit SPEC.toml [--store DIR] [--scheduler tcp://HOST:PORT | --workers N]
+    ditherlab submit SPEC.toml [--store DIR] [--scheduler tcp://HOST:PORT | --workers N] [--detach]
+    ditherlab serve [--store DIR] [--scheduler tcp://HOST:PORT | --workers N]
     ditherlab status [SWEEP]
+    ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
     ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE.png
     ditherlab plan SPEC.toml
@@ -46,8 +48,9 @@ def parse_sel(items: list[str] | None) -> dict[str, float]:
     return sel
 
 
-def resolve_sweep(root: Path, key: str) -> tuple[str, Path]:
-    """A sweep id, id prefix or name -> (sweep id, cube path)."""
+def resolve_sweep(root: Path, key: str, need_cube: bool = True) -> tuple[str, Path]:
+    """A sweep id, id prefix or name -> (sweep id, cube path); with ``need_cube=False``
+    the cube may not exist yet (a queued sweep)."""
     import store
 
     cat = store.Catalogue(root)
@@ -64,7 +67,7 @@ def resolve_sweep(root: Path, key: str) -> tuple[str, Path]:
         if current:
             row = max(current, key=lambda r: r["created"])
     cube = store.SweepDir(root, row["sweep_id"]).cube
-    if not cube.exists():
+    if need_cube and not cube.exists():
         raise UserError(f"sweep {row['sweep_id']} has no cube yet at {cube}; submit it again")
     return row["sweep_id"], cube
 
@@ -87,11 +90,11 @@ def is_stale(row: dict, ds=None) -> bool:
     Judged by the recorded fingerprint; without one (a sweep from before fingerprints,
     or a row registered before its run began), by whether its spec still hashes to its id.
     """
-    from engine import provenance
+    from .version import results_fingerprint
 
     made = engine_of(row, ds)
     if made:
-        return made != provenance.fingerprint()
+        return made != results_fingerprint()
     try:
         spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
     except (SpecError, ValueError, TypeError):
@@ -102,7 +105,7 @@ def is_stale(row: dict, ds=None) -> bool:
 def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
     """One line saying a sweep is stale and how to recompute it, or None if current."""
     import store
-    from engine import provenance
+    from .version import results_fingerprint
 
     if not is_stale(row, ds):
         return None
@@ -110,7 +113,7 @@ def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
     saved = store.SweepDir(root, row["sweep_id"]).spec if root is not None else None
     spec = f" (e.g. {saved})" if saved is not None and saved.exists() else ""
     return (f"sweep {row['sweep_id']} was made by engine {made}, the installed engine is "
-            f"{provenance.fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
+            f"{results_fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
 
 
 def _warn_stale(root: Path, sweep_id: str, ds) -> None:
@@ -135,6 +138,8 @@ def cmd_submit(args) -> int:
     root = store_root(args.store)
     print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
           f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
+    if args.detach:
+        return _submit_detached(plan, root)
     try:
         res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
                      progress=not args.quiet)
@@ -143,9 +148,14 @@ def cmd_submit(args) -> int:
                           "submit the spec again to resume") from None
     except store.layout.NoSpaceError as exc:
         raise UserError(f"{exc}; {_kept(plan, root)}") from None
-    verb = "already complete" if res.blocks_run == 0 else f"ran {res.blocks_run} blocks"
+    if res.attached_to:
+        verb = f"attached to the run in {res.attached_to}"
+    else:
+        verb = "already complete" if res.blocks_run == 0 else f"ran {res.blocks_run} blocks"
     print(f"{res.sweep_id}: {res.state}, {verb}; {res.n_ok}/{res.n_points} ok, "
           f"{res.n_failed} failed; {res.wall_s:.1f} s\ncube: {res.cube_path}")
+    if res.message:
+        print(f"{res.sweep_id}: {res.message}", file=sys.stderr)
     return 0 if res.state == "done" else EXIT_FAILED
 
 
@@ -160,38 +170,146 @@ def _kept(plan, root: Path) -> str:
     return f"the journal keeps the {n} finished blocks (of {len(plan.blocks)})"
 
 
+def _submit_detached(plan, root: Path) -> int:
+    """``submit --detach``: queue the sweep for ``ditherlab serve`` and return at once."""
+    import store
+
+    from .service import enqueue
+
+    row = enqueue(plan, root)
+    cat = store.Catalogue(root)
+    state = cat.live_state(row)
+    if state == "queued":
+        print(f"{row['sweep_id']}: queued")
+        if not cat.servers():
+            print(f"ditherlab: no `ditherlab serve` is running on store {root}; start one to "
+                  "run the queue", file=sys.stderr)
+    elif state == "running":
+        print(f"{row['sweep_id']}: running in {row['owner']} (`ditherlab status "
+              f"{row['sweep_id']}` shows its progress)")
+    else:
+        print(f"{row['sweep_id']}: {state}, already complete")
+    return 0
+
+
+def cmd_serve(args) -> int:
+    from .service import serve
+
+    return serve(store_root(args.store), scheduler=args.scheduler, workers=args.workers,
+                 progress=False)
+
+
+def cmd_cancel(args) -> int:
+    import store
+
+    from .service import cancel
+
+    try:
+        row = cancel(store_root(args.store), args.sweep, wait=args.wait)
+    except LookupError as exc:
+        raise UserError(str(exc)) from None
+    state, sid = store.Catalogue.live_state(row), row["sweep_id"]
+    if state == "cancelled":
+        print(f"{sid}: cancelled; {row['message']}")
+    elif state == "running" and row["cancel_requested"]:
+        print(f"{sid}: cancel requested; {row['owner']} stops after its blocks in flight "
+              f"(`ditherlab status {sid}` shows when)")
+    else:
+        print(f"{sid}: {state}; nothing to cancel")
+    return 0
+
+
 def cmd_status(args) -> int:
     import store
 
-    cat = store.Catalogue(store_root(args.store))
+    from .service import queue_hint
+
+    root = store_root(args.store)
+    cat = store.Catalogue(root)
     if args.sweep:
-        sweep_id, cube = resolve_sweep(store_root(args.store), args.sweep)
+        sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
         row = cat.get(sweep_id)
-        ds = store.open_cube(cube)
-        live, note = cat.live_state(row), stale_note(row, ds, store_root(args.store))
+        ds = store.open_cube(cube) if cube.exists() else None
+        live, note = cat.live_state(row), stale_note(row, ds, root)
         row["state"] = f"{live} ({STALE})" if note else live
-        for key, value in row.items():
-            if key != "spec_json":
-                print(f"{key:>14}: {value}")
+        for key, value in _shown(row, live).items():
+            print(f"{key:>14}: {value}")
         if note:
             print(f"{'':>16}{note}")
         elif live == store.catalogue.STALLED:
             print(f"{'':>16}the submitting process ({row['owner']}) is gone; submit the spec "
                   "again to resume (finished blocks are kept)")
-        _print_error_estimate(ds)
-        _warn_accuracy(ds)
+        elif live == "queued":
+            print(f"{'':>16}{queue_hint(cat, [row])}")
+        if ds is not None:
+            _print_error_estimate(ds)
+            _warn_accuracy(ds)
         return 0
     rows = cat.list()
     if not rows:
-        print(f"no sweeps in {store_root(args.store)}")
+        print(f"no sweeps in {root}")
         return 0
-    states = [cat.live_state(r) + (f" ({STALE})" if is_stale(r) else "") for r in rows]
-    w = max(9, *(len(s) + 1 for s in states))
-    print(f"{'sweep':<13}{'name':<24}{'state':<{w}}{'points':>8}{'done':>8}{'failed':>8}  updated")
-    for r, state in zip(rows, states):
+    lives = [cat.live_state(r) for r in rows]
+    states = [live + (f" ({STALE})" if is_stale(r) else "") for r, live in zip(rows, lives)]
+    w = max(10, *(len(s) + 1 for s in states))
+    print(f"{'sweep':<13}{'name':<24}{'state':<{w}}{'points':>8}{'done':>8}{'failed':>8}"
+          f"{'blocks':>10}  note")
+    for r, state, live in zip(rows, states, lives):
+        blocks = f"{r['done_blocks']}/{r['n_blocks']}" if r["n_blocks"] else "-"
         print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{state:<{w}}{r['n_points']:>8}"
-              f"{r['done_points']:>8}{r['failed_points']:>8}  {r['updated']}")
+              f"{r['done_points']:>8}{r['failed_points']:>8}{blocks:>10}  {_note(r, live)}")
+    hint = queue_hint(cat, rows)
+    if hint:
+        print(hint)
     return 0
+
+
+def _note(row: dict, live: str, width: int = 90) -> str:
+    """The last column of ``status``: progress and ETA, the error, or when it changed."""
+    from .service import progress_text
+
+    if live == "running":
+        text = progress_text(row) + (", cancel requested" if row["cancel_requested"] else "")
+    elif live == "stalled":
+        text = f"{row['owner']} is gone; submit the spec again to resume"
+    elif live == "queued":
+        text = row["message"] or f"queued {row['queued_at'][:19]}"
+    elif live == "done":
+        text = f"finished {row['updated'][:19]}"
+    else:
+        text = row["message"] or f"{live} {row['updated'][:19]}"
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def _shown(row: dict, live: str) -> dict:
+    """A catalogue row for ``status SWEEP``: times readable, progress and ETA added."""
+    import time
+
+    from .service import format_seconds, progress_text
+
+    shown = {k: v for k, v in row.items() if k != "spec_json"}
+    beat = float(row.get("heartbeat") or 0.0)
+    shown["heartbeat"] = f"{time.time() - beat:.1f} s ago" if beat else "-"
+    started = float(row.get("run_started") or 0.0)
+    shown["run_started"] = (time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started))
+                            if started else "-")
+    if live == "running":
+        shown["progress"] = progress_text(row)
+    elif live == "failed":
+        shown["error"] = row["message"]
+    if started and live != "running" and row["state"] != "queued":
+        shown["run_took"] = format_seconds(
+            _seconds_between(started, row["updated"]))
+    return shown
+
+
+def _seconds_between(epoch: float, iso: str) -> float | None:
+    from datetime import datetime
+
+    try:
+        return datetime.fromisoformat(iso).timestamp() - epoch
+    except ValueError:
+        return None
 
 
 def _print_error_estimate(ds) -> None:
@@ -309,7 +427,23 @@ def build_parser() -> argparse.ArgumentParser:
     where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, help="point budget")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--detach", action="store_true",
+                   help="queue the sweep for `ditherlab serve` and return its id at once")
     p.set_defaults(func=cmd_submit)
+
+    p = sub.add_parser("serve", parents=[common],
+                       help="run queued sweeps, oldest first, until SIGTERM or Ctrl-C")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
+    where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.set_defaults(func=cmd_serve)
+
+    p = sub.add_parser("cancel", parents=[common],
+                       help="cancel a queued sweep, or stop a running one after its blocks "
+                       "in flight (the journal is kept; submitting again resumes)")
+    p.add_argument("sweep")
+    p.add_argument("--wait", action="store_true", help="return once the run has stopped")
+    p.set_defaults(func=cmd_cancel)
 
     p = sub.add_parser("status", parents=[common], help="list sweeps, or show one")
     p.add_argument("sweep", nargs="?")

@@ -1,0 +1,379 @@
+"""ditherlab as a batch service (DESIGN.md §5-6): a queue, ``serve``, ``cancel``, and one
+writer per sweep.
+
+The catalogue (store.catalogue) is the only shared state. Every state change is one SQLite
+transaction; a process computes a sweep's blocks only while it holds the sweep's *lease*
+(the row's ``owner`` and ``heartbeat``):
+
+- ``submit --detach`` registers the sweep and queues it (:func:`enqueue`); nothing else runs,
+  and dask is not imported.
+- ``serve`` (:func:`serve`) claims the oldest queued sweep (``Catalogue.claim_next``: queued ->
+  running under its ``host:pid``), runs it on one dask cluster it keeps for its lifetime, and
+  takes the next. SIGTERM or SIGINT: the running sweep finishes its in-flight blocks (the
+  journal keeps them), goes back to ``queued`` with a message, and serve exits 0. A second
+  signal stops at once (the journal still keeps every finished block).
+- A foreground ``submit`` takes the lease (``Catalogue.acquire``). If a live process holds it,
+  the submitter *attaches* (:func:`attach`): it computes nothing, prints the progress the
+  holder writes to the catalogue, and returns the final result. If the holder dies (its pid is
+  gone on this host, or its heartbeat is older than ``STALE_S``), the attached submitter takes
+  the lease over and computes the blocks still missing from the journal.
+- ``ditherlab cancel`` (:func:`cancel`): a queued sweep is cancelled at once; a running one is
+  flagged, and its runner, which asks the catalogue between blocks (:meth:`Lease.stop_reason`),
+  stops after its in-flight blocks.
+
+While it holds a lease a runner beats every ``HEARTBEAT_S`` seconds from a thread
+(:class:`Lease`); a beat that finds the lease taken over stops the runner too, so a block is
+never computed by two processes that both believe they own the sweep.
+"""
+from __future__ import annotations
+
+import json
+import logging
+import signal
+import sys
+import threading
+import time
+from pathlib import Path
+
+import store
+from store.catalogue import FINAL, HEARTBEAT_S, STALLED, Catalogue, owner_tag
+
+log = logging.getLogger("ditherlab")
+
+PROGRESS_EVERY_S = 0.5     # a runner writes its counts to the catalogue at most this often
+CANCEL_POLL_S = 0.25       # ... and asks whether it was cancelled at most this often
+ATTACH_POLL_S = 0.5        # an attached submitter reads the catalogue this often
+SERVE_POLL_S = 1.0         # an idle serve looks for queued sweeps this often
+
+# why a run stopped before its last block
+CANCELLED, SHUTDOWN, LEASE_LOST = "cancelled", "shutdown", "lease lost"
+
+
+class Lease:
+    """A held lease on one sweep: heartbeat thread, progress, and the stop question.
+
+    Create it with :meth:`take` (foreground submit) or, when the row is already ``running``
+    under ``owner`` (serve's claim), :meth:`take` as well: the same owner may re-take it.
+    """
+
+    def __init__(self, catalogue: Catalogue, sweep_id: str, owner: str,
+                 stop: threading.Event | None = None):
+        self.catalogue, self.sweep_id, self.owner = catalogue, sweep_id, owner
+        self.shutdown = stop or threading.Event()   # set by serve's signal handler
+        self.lost = threading.Event()               # a beat found the lease taken over
+        self.counts: dict = {}
+        self._last_progress = 0.0
+        self._last_cancel_poll = 0.0
+        self._cancelled = False
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._beat_loop, daemon=True,
+                                        name=f"ditherlab-lease-{sweep_id}")
+
+    @classmethod
+    def take(cls, catalogue: Catalogue, sweep_id: str, owner: str | None = None,
+             stop: threading.Event | None = None) -> tuple[Lease | None, dict]:
+        """``(Lease, row)`` when this process now holds the sweep, else ``(None, row)``
+        with the row of the live holder."""
+        owner = owner or owner_tag()
+        got, row = catalogue.acquire(sweep_id, owner)
+        if not got:
+            return None, row
+        lease = cls(catalogue, sweep_id, owner, stop)
+        lease._thread.start()
+        return lease, row
+
+    def _beat_loop(self) -> None:
+        while not self._done.wait(HEARTBEAT_S):
+            try:
+                if not self.catalogue.beat(self.sweep_id, self.owner):
+                    self.lost.set()
+                    return
+            except Exception as err:  # noqa: BLE001 -- a busy catalogue: try again next beat
+                log.warning("heartbeat of sweep %s failed: %s", self.sweep_id, err)
+
+    def due(self) -> bool:
+        """True when the next :meth:`progress` would be written (PROGRESS_EVERY_S)."""
+        return time.monotonic() - self._last_progress >= PROGRESS_EVERY_S
+
+    def progress(self, force: bool = False, **counts) -> None:
+        """Record counts (``done_points``, ``failed_points``, ``done_blocks``,
+        ``run_started``, ``run_start_blocks``); written at most every PROGRESS_EVERY_S."""
+        self.counts.update(counts)
+        now = time.monotonic()
+        if force or now - self._last_progress >= PROGRESS_EVERY_S:
+            self._last_progress = now
+            if not self.catalogue.beat(self.sweep_id, self.owner, **self.counts):
+                self.lost.set()
+
+    def stop_reason(self) -> str | None:
+        """Why the runner should submit no more blocks, or None to go on."""
+        if self.lost.is_set():
+            return LEASE_LOST
+        if self._cancelled:
+            return CANCELLED
+        now = time.monotonic()
+        if now - self._last_cancel_poll >= CANCEL_POLL_S:
+            self._last_cancel_poll = now
+            self._cancelled = self.catalogue.cancel_requested(self.sweep_id)
+            if self._cancelled:
+                return CANCELLED
+        if self.shutdown.is_set():
+            return SHUTDOWN
+        return None
+
+    def close(self) -> None:
+        """Stop the heartbeat (the row's state is set by :meth:`end`)."""
+        self._done.set()
+        if self._thread.is_alive() and self._thread is not threading.current_thread():
+            self._thread.join(timeout=HEARTBEAT_S + 1)
+
+    def end(self, state: str, message: str = "", **counts) -> bool:
+        """Give the lease back with the final ``state`` (``queued`` puts the sweep back in
+        the queue). False if the lease had been taken over (the row is left alone)."""
+        self.close()
+        counts = {k: v for k, v in {**self.counts, **counts}.items()
+                  if k in ("done_points", "failed_points", "done_blocks")}
+        if state == "queued":
+            return self.catalogue.requeue(self.sweep_id, self.owner, message, **counts)
+        changed, _ = self.catalogue.finish(self.sweep_id, state, owner=self.owner,
+                                           message=message, **counts)
+        return changed
+
+
+# --- submit --detach -------------------------------------------------------------------
+
+def enqueue(plan, store_root) -> dict:
+    """Record ``plan`` as a queued sweep (spec saved in its folder); returns the row.
+
+    A sweep that is done or running (live) is left as it is: the row says so.
+    """
+    store.layout.check_store(store_root, write=True)   # read-only, a file: one line, now
+    sweep = store.SweepDir(store_root, plan.sweep_id)
+    catalogue = Catalogue(store_root)
+    sweep.root.mkdir(parents=True, exist_ok=True)
+    spec_json = plan.spec.to_json()
+    sweep.write_spec(spec_json)
+    catalogue.register(plan.sweep_id, plan.spec.name, spec_json, plan.n_points,
+                       len(plan.blocks), sweep.root)
+    row = catalogue.enqueue(plan.sweep_id)
+    if row["state"] == "done" and not sweep.cube.exists():   # a lost cube: rebuild it
+        catalogue.finish(plan.sweep_id, "cancelled", message="cube missing; re-queued")
+        row = catalogue.enqueue(plan.sweep_id)
+    return row
+
+
+# --- progress and attaching ------------------------------------------------------------
+
+def eta_s(row: dict, now: float | None = None) -> float | None:
+    """Seconds left for a running sweep, from its block rate since its run began."""
+    started, first = float(row.get("run_started") or 0.0), int(row.get("run_start_blocks") or 0)
+    done, total = int(row["done_blocks"]), int(row["n_blocks"])
+    if not started or done <= first or total <= 0:
+        return None
+    rate = (done - first) / max((now or time.time()) - started, 1e-9)
+    return max(total - done, 0) / rate
+
+
+def format_seconds(s: float | None) -> str:
+    if s is None:
+        return "?"
+    s = int(round(s))
+    if s < 60:
+        return f"{s} s"
+    if s < 3600:
+        return f"{s // 60} min {s % 60:02d} s"
+    return f"{s // 3600} h {s % 3600 // 60:02d} min"
+
+
+def progress_text(row: dict) -> str:
+    """``12/32 blocks (37 %), ETA 25 s`` for a running row."""
+    total = int(row["n_blocks"]) or 1
+    done = int(row["done_blocks"])
+    text = f"{done}/{row['n_blocks']} blocks ({100 * done / total:.0f} %)"
+    eta = eta_s(row)
+    return text + (f", ETA {format_seconds(eta)}" if eta is not None else "")
+
+
+def attach(catalogue: Catalogue, sweep_id: str, *, progress: bool = True,
+           poll_s: float = ATTACH_POLL_S, out=None) -> dict:
+    """Wait while another live process runs the sweep, printing its progress; returns the
+    row once nobody holds the lease (final, queued or stalled), with ``attached_to``: the
+    owner it waited for."""
+    out = out or sys.stderr
+    row = catalogue.get(sweep_id)
+    holder = row["owner"]
+    if progress:
+        print(f"sweep {sweep_id} is running in {row['owner']}: attaching (this process "
+              "computes nothing; Ctrl-C detaches and leaves it running)", file=out, flush=True)
+    last = ""
+    while row["state"] == "running" and Catalogue.alive(row):
+        if progress:
+            text = progress_text(row)
+            if text != last:
+                print(f"  {sweep_id}: {text}", file=out, flush=True)
+                last = text
+        time.sleep(poll_s)
+        row = catalogue.get(sweep_id)
+    return {**row, "attached_to": holder}
+
+
+# --- cancel ----------------------------------------------------------------------------
+
+def cancel(store_root, key: str, *, wait: bool = False, timeout_s: float | None = None,
+           poll_s: float = ATTACH_POLL_S) -> dict:
+    """Cancel a sweep (id, id prefix or name); returns its row after the request (after it
+    stopped, with ``wait``). ``LookupError`` if there is no such sweep."""
+    store.layout.check_store(store_root, write=True)
+    catalogue = Catalogue(store_root)
+    found = catalogue.find(key)
+    if found is None:
+        raise LookupError(f"no sweep {key!r} in store {store_root} (see `ditherlab status`)")
+    row = catalogue.request_cancel(found["sweep_id"])
+    t0 = time.monotonic()
+    while wait and row["state"] == "running" and Catalogue.alive(row):
+        if timeout_s is not None and time.monotonic() - t0 > timeout_s:
+            break
+        time.sleep(poll_s)
+        row = catalogue.get(row["sweep_id"])
+    return row
+
+
+# --- serve -----------------------------------------------------------------------------
+
+class _Signals:
+    """SIGTERM/SIGINT: the first sets ``stop`` (finish in-flight blocks, re-queue, exit 0);
+    a second raises KeyboardInterrupt (stop now; the journal keeps finished blocks)."""
+
+    def __init__(self, stop: threading.Event, say):
+        self.stop, self.say, self.previous = stop, say, {}
+
+    def __enter__(self):
+        for sig in (signal.SIGTERM, signal.SIGINT):
+            self.previous[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def _handle(self, signum, frame):
+        if self.stop.is_set():
+            raise KeyboardInterrupt
+        self.stop.set()
+        self.say(f"serve: {signal.Signals(signum).name}: stopping; a running sweep finishes "
+                 "its blocks in flight and goes back to the queue (signal again to stop at once)")
+
+    def __exit__(self, *exc):
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
+        return False
+
+
+def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
+          poll_s: float = SERVE_POLL_S, idle_exit_s: float | None = None,
+          progress: bool = False, say=None) -> int:
+    """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
+    (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
+    from .plan import make_plan
+    from .run import dask_client, submit
+    from .spec import SpecError, load_spec
+
+    say = say or (lambda text: print(text, file=sys.stderr, flush=True))
+    root = store.layout.check_store(store_root, write=True)
+    catalogue = Catalogue(root)
+    me = owner_tag()
+    stop = threading.Event()
+    where = scheduler or f"local cluster of {workers} workers"
+    client_cm = client = None
+    idle_since = time.monotonic()
+    current = {"sweep_id": ""}
+    beating = threading.Event()
+
+    def beat_loop() -> None:   # serve's own heartbeat, also while a sweep runs
+        while not beating.wait(HEARTBEAT_S):
+            try:
+                catalogue.server_beat(me, sweep_id=current["sweep_id"], cluster=where)
+            except Exception as err:  # noqa: BLE001 -- a busy catalogue: next beat
+                log.warning("serve heartbeat failed: %s", err)
+
+    catalogue.server_beat(me, cluster=where)
+    threading.Thread(target=beat_loop, daemon=True, name="ditherlab-serve-beat").start()
+    say(f"serve {me}: store {root}, {where}; waiting for queued sweeps (SIGTERM or Ctrl-C "
+        "stops)")
+    try:
+        with _Signals(stop, say):
+            while not stop.is_set():
+                current["sweep_id"] = ""
+                row = catalogue.claim_next(me)
+                if row is None:
+                    if idle_exit_s is not None and time.monotonic() - idle_since > idle_exit_s:
+                        break
+                    stop.wait(poll_s)
+                    continue
+                sweep_id = current["sweep_id"] = row["sweep_id"]
+                catalogue.server_beat(me, sweep_id=sweep_id, cluster=where)
+                try:
+                    plan = make_plan(load_spec(json.loads(row["spec_json"]),
+                                               max_points=max(row["n_points"], 1)))
+                except (SpecError, ValueError) as err:
+                    catalogue.finish(sweep_id, "failed", owner=me,
+                                     message=f"cannot run the queued spec: {err}")
+                    say(f"serve: {sweep_id} failed: {err}")
+                    continue
+                if plan.sweep_id != sweep_id:
+                    # the engine (or ditherlab) changed since it was queued: its results
+                    # belong under the id the installed engine gives the spec
+                    enqueue(plan, root)
+                    catalogue.finish(sweep_id, "cancelled", owner=me, message=(
+                        f"the engine changed after it was queued; re-queued as {plan.sweep_id}"))
+                    say(f"serve: {sweep_id}: the engine changed since it was queued; "
+                        f"re-queued as {plan.sweep_id}")
+                    continue
+                say(f"serve: running {sweep_id} '{plan.spec.name}': {plan.n_points} points in "
+                    f"{len(plan.blocks)} blocks")
+                if client is None and plan.path == "simulate":
+                    client_cm = dask_client(scheduler, workers)
+                    client = client_cm.__enter__()
+                try:
+                    res = submit(plan, root, scheduler=scheduler, workers=workers,
+                                 progress=progress, client=client, owner=me, stop=stop)
+                except Exception as err:  # noqa: BLE001 -- recorded as failed; serve goes on
+                    text = f"{type(err).__name__}: {err}".splitlines()[0][:500]
+                    say(f"serve: {sweep_id} failed: {text}")
+                    # raised before the run took its lease (store checks): still ours
+                    catalogue.finish(sweep_id, "failed", owner=me,
+                                     message=f"the run could not start: {text}")
+                    if client_cm is not None:   # the cluster may be the culprit: a fresh one
+                        client_cm.__exit__(None, None, None)
+                        client_cm = client = None
+                else:
+                    say(f"serve: {sweep_id}: {res.state}, ran {res.blocks_run} blocks; "
+                        f"{res.n_ok}/{res.n_points} ok, {res.n_failed} failed; "
+                        f"{res.wall_s:.1f} s" + (f" ({res.message})" if res.message else ""))
+                idle_since = time.monotonic()
+                catalogue.server_beat(me, cluster=where)
+    finally:
+        beating.set()
+        if current["sweep_id"]:   # interrupted between claim and run: back to the queue
+            catalogue.requeue(current["sweep_id"], me, "re-queued: serve was interrupted")
+        if client_cm is not None:
+            client_cm.__exit__(None, None, None)
+        catalogue.server_gone(me)
+    say(f"serve {me}: stopped")
+    return 0
+
+
+def queue_hint(catalogue: Catalogue, rows: list[dict]) -> str | None:
+    """A line for ``status``: who serves this store, or that queued sweeps wait for one."""
+    servers = catalogue.servers()
+    queued = sum(1 for r in rows if r["state"] == "queued")
+    if servers:
+        parts = []
+        for s in servers:
+            doing = f"running {s['sweep_id']}" if s["sweep_id"] else "idle"
+            parts.append(f"{s['owner']} ({doing}, {s['cluster']})")
+        return "serve: " + "; ".join(parts)
+    if queued:
+        return (f"{queued} queued sweep(s) wait for `ditherlab serve` (no serve process is "
+                "running on this store)")
+    return None
+
+
+__all__ = ["CANCELLED", "FINAL", "LEASE_LOST", "SHUTDOWN", "STALLED", "Lease", "attach",
+           "cancel", "enqueue", "eta_s", "progress_text", "queue_hint", "serve"]

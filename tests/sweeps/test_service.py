@@ -1,0 +1,368 @@
+"""ditherlab as a batch service (issue 10; DESIGN.md §5-6), through the real command line:
+``submit --detach`` queues, ``serve`` runs the queue and stops cleanly on SIGTERM, ``cancel``
+stops queued and running sweeps, a ``serve`` killed with SIGKILL reads ``stalled`` and is
+resumed, two submitters of one spec compute every block exactly once, and ``partial`` (some
+points failed) is told apart from ``failed`` (the run crashed).
+
+Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.run.compute_block
+appends one line per computed block, in whichever process computes it)."""
+import collections
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import store
+from sweeps import make_plan
+from sweeps.run import block_key
+from sweeps.run import compute_block as REAL_COMPUTE_BLOCK
+from sweeps.spec import load_spec
+
+from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, ditherlab
+from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
+
+# 16 one-point blocks of ~0.3-2 s each: time to act on a running sweep between blocks
+SLOW_SPEC = RESUME_SPEC.replace("t_end = 300.0", "t_end = 900.0").replace(
+    'name = "e2e-sim"', 'name = "e2e-slow"').replace(
+    "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]", "W = [0.0, 0.2, 0.4, 0.6]")
+FAST_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1")
+N_SLOW = 16
+
+
+def _wait_for(predicate, timeout, what, poll=0.1):
+    t0 = time.monotonic()
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() - t0 > timeout:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(poll)
+
+
+def _row(root, sweep_id):
+    return store.Catalogue(root).get(sweep_id)
+
+
+def _journaled(root, sweep_id) -> int:
+    folder = root / sweep_id / "journal"
+    return len(list(folder.glob("block-*.npz"))) if folder.exists() else 0
+
+
+def _computed(log) -> collections.Counter:
+    """How often each block (by the hash of its points) was computed."""
+    if not log.exists():
+        return collections.Counter()
+    return collections.Counter(line.split()[1] for line in log.read_text().splitlines())
+
+
+def _block_keys(spec):
+    plan = make_plan(spec)
+    return [block_key(plan.scene, plan.block_points(b), plan.numerics.settings)
+            for b in range(len(plan.blocks))]
+
+
+class Serve:
+    """A ``ditherlab serve`` subprocess in its own session (its local cluster with it)."""
+
+    def __init__(self, root, tmp_path, env, name="serve"):
+        self.log = tmp_path / f"{name}.log"
+        with open(self.log, "w") as out:
+            self.proc = subprocess.Popen(
+                [str(BIN), "serve", "--store", str(root), "--workers", "2"],
+                stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
+
+    def stop(self, sig=signal.SIGTERM, timeout=120) -> int:
+        os.kill(self.proc.pid, sig)
+        return self.proc.wait(timeout=timeout)
+
+    def kill(self):
+        if self.proc.poll() is None:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        self.proc.wait()
+
+    def text(self) -> str:
+        return self.log.read_text()
+
+
+@pytest.fixture
+def env(tmp_path):
+    return {**os.environ, "MPLBACKEND": "Agg", "DITHERLAB_BLOCK_LOG": str(tmp_path / "blocks.log")}
+
+
+def detach(path, root, env) -> str:
+    """``submit --detach``; returns the sweep id it printed (the id is taken from the
+    command, not recomputed here: it hashes the engine sources, which may change)."""
+    out = run_cli("submit", str(path), "--detach", store_root=root, env=env).stdout
+    return out.split(":")[0]
+
+
+def run_cli(*args, store_root, env, check=True):
+    proc = subprocess.run([str(BIN), *args, "--store", str(store_root)], capture_output=True,
+                          text=True, env=env, timeout=600)
+    if check and proc.returncode != 0:
+        raise AssertionError(f"{args} -> {proc.returncode}\n{proc.stdout}\n{proc.stderr}")
+    return proc
+
+
+def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, env):
+    root = tmp_path / "store"
+    fast, avg = spec_file(FAST_SPEC, "fast.toml"), spec_file(AVERAGED_SPEC, "avg.toml")
+    t0 = time.monotonic()
+    proc = run_cli("submit", str(fast), "--detach", store_root=root, env=env)
+    took = time.monotonic() - t0
+    print(f"submit --detach returned in {took:.2f} s")
+    fast_id = proc.stdout.split(":")[0]
+    assert proc.stdout.strip() == f"{fast_id}: queued"
+    assert "no `ditherlab serve` is running" in proc.stderr
+    assert (root / fast_id / "spec.json").exists() and not (root / fast_id / "cube.h5").exists()
+    assert _row(root, fast_id)["state"] == "queued"
+    listing = run_cli("status", store_root=root, env=env).stdout
+    assert "queued" in listing and "wait for `ditherlab serve`" in listing, listing
+    detail = run_cli("status", fast_id[:6], store_root=root, env=env).stdout
+    assert "state: queued" in detail, detail
+
+    serve = Serve(root, tmp_path, env)
+    try:
+        _wait_for(lambda: _row(root, fast_id)["state"] == "done", 300, "the queued sweep done")
+        # a sweep queued while serve runs is picked up too
+        avg_id = detach(avg, root, env)
+        _wait_for(lambda: _row(root, avg_id)["state"] == "done", 120, "the second sweep done")
+        listing = run_cli("status", store_root=root, env=env).stdout
+        assert "serve: " in listing and "idle" in listing, listing
+        assert serve.stop() == 0, serve.text()
+    finally:
+        serve.kill()
+    assert store.Catalogue(root).servers() == []
+    assert "stopped" in serve.text()
+    for sid in (fast_id, avg_id):
+        row = _row(root, sid)
+        assert (row["owner"], row["done_blocks"]) == ("", row["n_blocks"]), row
+        with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:
+            assert (ds["status"] == 0).all()
+    assert set(_computed(tmp_path / "blocks.log").values()) == {1}
+    # submitting a finished sweep detached again changes nothing
+    again = run_cli("submit", str(fast), "--detach", store_root=root, env=env)
+    assert "already complete" in again.stdout
+
+
+def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, env):
+    root = tmp_path / "store"
+    path = spec_file(SLOW_SPEC)
+    spec = load_spec(path)
+    sid = detach(path, root, env)
+    out = run_cli("cancel", "e2e-slow", store_root=root, env=env).stdout
+    assert out.startswith(f"{sid}: cancelled") and "while queued" in out, out
+    assert _row(root, sid)["state"] == "cancelled"
+
+    assert detach(path, root, env) == sid   # queued again
+    assert _row(root, sid)["state"] == "queued"
+    serve = Serve(root, tmp_path, env)
+    try:
+        _wait_for(lambda: _journaled(root, sid) >= 1, 300, "a journaled block", poll=0.05)
+        out = run_cli("cancel", sid, "--wait", store_root=root, env=env).stdout
+        assert out.startswith(f"{sid}: cancelled"), out
+        row = _row(root, sid)
+        assert row["state"] == "cancelled" and row["owner"] == "" and "cancelled after" in \
+            row["message"], row
+        k = _journaled(root, sid)
+        assert 1 <= k < N_SLOW and row["done_blocks"] == k, (k, row)
+        assert serve.proc.poll() is None   # serve goes on serving
+        listing = run_cli("status", store_root=root, env=env).stdout
+        assert "cancelled" in listing and f"{k}/{N_SLOW}" in listing, listing
+        assert serve.stop() == 0, serve.text()
+    finally:
+        serve.kill()
+    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:   # readable
+        assert int((ds["status"] == 0).sum()) == k
+        assert set(np.unique(ds["status"].values)) == {0, 1}
+    # submitting again resumes: only the blocks the journal lacks
+    resumed = run_cli("submit", str(path), "--quiet", store_root=root, env=env).stdout
+    assert f"ran {N_SLOW - k} blocks" in resumed and "done" in resumed, resumed
+    counts = _computed(tmp_path / "blocks.log")
+    assert all(counts[key] == 1 for key in _block_keys(spec)), counts
+    assert _row(root, sid)["done_blocks"] == N_SLOW
+
+
+def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_file, env):
+    root = tmp_path / "store"
+    path = spec_file(SLOW_SPEC)
+    spec = load_spec(path)
+    sid = detach(path, root, env)
+    serve = Serve(root, tmp_path, env)
+    try:
+        _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
+        t0 = time.monotonic()
+        assert serve.stop(signal.SIGTERM) == 0, serve.text()
+        print(f"serve exited {time.monotonic() - t0:.1f} s after SIGTERM")
+    finally:
+        serve.kill()
+    row = _row(root, sid)
+    k = _journaled(root, sid)
+    assert row["state"] == "queued" and row["owner"] == "" and "re-queued" in row["message"]
+    assert 3 <= k < N_SLOW and row["done_blocks"] == k, (k, row)
+    assert "SIGTERM" in serve.text() and "queued" in serve.text()
+    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:   # readable
+        assert int((ds["status"] == 0).sum()) == k   # every journaled block is in the cube
+    assert store.Catalogue(root).servers() == []
+
+    serve = Serve(root, tmp_path, env, name="serve2")
+    try:
+        _wait_for(lambda: _row(root, sid)["state"] == "done", 300, "the resumed sweep done")
+        assert serve.stop() == 0
+    finally:
+        serve.kill()
+    assert f"ran {N_SLOW - k} blocks" in serve.text(), serve.text()
+    counts = _computed(tmp_path / "blocks.log")
+    assert all(counts[key] == 1 for key in _block_keys(spec)), counts
+
+
+def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
+        tmp_path, spec_file, env):
+    root = tmp_path / "store"
+    path = spec_file(SLOW_SPEC)
+    spec = load_spec(path)
+    sid = detach(path, root, env)
+    serve = Serve(root, tmp_path, env)
+    try:
+        _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
+    finally:
+        serve.kill()   # SIGKILL to serve and its cluster
+    k = _journaled(root, sid)
+    before = _computed(tmp_path / "blocks.log")   # includes the blocks lost in flight
+    listing = run_cli("status", store_root=root, env=env).stdout
+    assert "stalled" in listing and "is gone" in listing, listing
+    detail = run_cli("status", sid, store_root=root, env=env).stdout
+    assert "state: stalled" in detail and "submit the spec again to resume" in detail, detail
+    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:
+        assert set(np.unique(ds["status"].values)) <= {0, 1}
+
+    # two submitters race to resume it: one takes the lease over, the other attaches
+    procs = [subprocess.Popen([str(BIN), "submit", str(path), "--store", str(root)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+             for _ in range(2)]
+    outs = [p.communicate(timeout=600) for p in procs]
+    assert [p.returncode for p in procs] == [0, 0], outs
+    ran = sorted(out for out, _ in outs)
+    assert any(f"ran {N_SLOW - k} blocks" in o for o in ran), ran
+    assert any("attached to the run in" in o for o in ran), ran
+    attached = next(err for out, err in outs if "attached" in out)
+    assert "attaching" in attached and "blocks (" in attached, attached   # progress shown
+    after = _computed(tmp_path / "blocks.log") - before
+    plan = make_plan(spec)
+    journaled = {int(f.stem.split("-")[1]) for f in (root / sid / "journal").glob("*.npz")}
+    assert len(journaled) == N_SLOW
+    keys = _block_keys(spec)
+    resumed = sorted(after[key] for key in keys)
+    print(f"kill -9 after {k} journaled blocks; resumed with {sum(resumed)} computations")
+    assert resumed == [0] * k + [1] * (N_SLOW - k), (k, after)   # the missing ones, once
+    assert len(plan.blocks) == N_SLOW
+    row = _row(root, sid)
+    assert (row["state"], row["done_blocks"], row["owner"]) == ("done", N_SLOW, "")
+
+
+def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env):
+    path = spec_file(RESUME_SPEC)
+    spec = load_spec(path)
+    shared, clean = tmp_path / "shared", tmp_path / "clean"
+    t0 = time.monotonic()
+    procs = [subprocess.Popen([str(BIN), "submit", str(path), "--store", str(shared)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+             for _ in range(2)]
+    outs = [p.communicate(timeout=600) for p in procs]
+    print(f"two submitters: {time.monotonic() - t0:.1f} s; " +
+          " | ".join(out.splitlines()[0] for out, _ in outs))
+    assert [p.returncode for p in procs] == [0, 0], outs
+    assert sorted("attached to the run in" in out for out, _ in outs) == [False, True], outs
+    counts = _computed(tmp_path / "blocks.log")
+    keys = _block_keys(spec)
+    print(f"block computations: {sum(counts[k] for k in keys)} for {len(keys)} blocks")
+    assert [counts[key] for key in keys] == [1] * len(keys), counts
+    clean_env = {k: v for k, v in env.items() if k != "DITHERLAB_BLOCK_LOG"}
+    run_cli("submit", str(path), "--quiet", store_root=clean, env=clean_env)
+    (cube,) = shared.glob("*/cube.h5")
+    assert_same_results(results(cube), results(clean / cube.parent.name / "cube.h5"))
+
+
+def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, env):
+    root = tmp_path / "store"
+    path = spec_file(SLOW_SPEC)
+    sid = load_spec(path).sweep_id
+    proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(root)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    try:
+        _wait_for(lambda: _journaled(root, sid) >= 2, 300, "two journaled blocks", poll=0.05)
+        os.killpg(proc.pid, signal.SIGINT)   # Ctrl-C reaches the whole process group
+        proc.communicate(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    row = _row(root, sid)
+    assert row["state"] == "cancelled" and "interrupted" in row["message"], row
+    assert row["owner"] == "" and row["done_blocks"] == _journaled(root, sid)
+
+
+# --- states: partial (some points failed) is not failed (the run crashed) -------------
+
+def _fake_runs(monkeypatch, how):
+    import sweeps.run as R
+
+    real = REAL_COMPUTE_BLOCK
+
+    def some_points_fail(scene, points, p, settings):
+        out = real(scene, points, p, settings)
+        if points[0, 0] == 0.0:   # the blocks at W = 0 fail
+            out["status"] = np.full(len(points), store.FAILED, np.int8)
+        return out
+
+    def crash(scene, points, p, settings):
+        if points[0, 0] > 0.5:
+            raise RuntimeError("the cluster went away")
+        return real(scene, points, p, settings)
+
+    monkeypatch.setattr(R, "compute_block", {"partial": some_points_fail, "crash": crash}[how])
+
+
+SMALL_AVG = {"name": "avg", "method": "averaged",   # 8 one-point blocks
+             "grid": {"W": [0.0, 0.4, 0.8, 1.0], "v_ref": [0.1, 0.5], "v_d": [0.1]}}
+
+
+def test_partial_and_failed_are_told_apart(tmp_path, monkeypatch, capsys):
+    from sweeps import cli, parse_spec, submit
+
+    plan = make_plan(parse_spec(SMALL_AVG))
+    part, crash = tmp_path / "partial", tmp_path / "crash"
+    _fake_runs(monkeypatch, "partial")
+    res = submit(plan, part, progress=False)
+    assert res.state == "partial" and res.n_failed == 2 and "2 of 8 points failed" in res.message
+    row = _row(part, plan.sweep_id)
+    assert (row["state"], row["done_blocks"], row["n_blocks"]) == ("partial", 8, 8)
+
+    _fake_runs(monkeypatch, "crash")
+    with pytest.raises(RuntimeError, match="the cluster went away"):
+        submit(plan, crash, progress=False)
+    row = _row(crash, plan.sweep_id)
+    assert row["state"] == "failed" and row["owner"] == ""
+    assert "the run crashed after 4/8 blocks: RuntimeError: the cluster went away" in \
+        row["message"]
+    assert row["done_blocks"] == 4 and row["done_points"] == 4
+
+    capsys.readouterr()
+    assert cli.main(["status", "--store", str(part)]) == 0
+    assert "partial" in capsys.readouterr().out
+    assert cli.main(["status", "--store", str(crash)]) == 0
+    listing = capsys.readouterr().out
+    assert "failed" in listing and "the run crashed" in listing, listing
+    assert cli.main(["status", "avg", "--store", str(crash)]) == 0
+    detail = capsys.readouterr().out
+    assert "state: failed" in detail and "error: the run crashed" in detail, detail
+
+    monkeypatch.undo()   # the crash is gone: submitting again resumes the 4 missing blocks
+    res = submit(plan, crash, progress=False)
+    assert (res.state, res.blocks_run) == ("done", 4)
