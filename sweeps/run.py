@@ -105,17 +105,18 @@ def _note_block(path: str, key: str) -> None:
 
 
 def warm_up(scene, p: np.ndarray, settings) -> float:
-    """Compile the block kernel in this process (once per worker); returns seconds."""
+    """Compile the block kernel in this process (once per worker); returns seconds.
+    Calls the engine directly, not compute_block: no ``$DITHERLAB_BLOCK_LOG`` line."""
+    from engine.batch import run_block
+
     t0 = time.perf_counter()
     q = p.copy()
     q[P.T_END] = min(q[P.T_END], 1e-3)
     q[P.T_TRANSIENT] = 0.0
-    from engine.batch import run_block   # not compute_block: no $DITHERLAB_BLOCK_LOG line
-
     try:
         run_block(scene, np.array([[0.1, 1000.0, 0.1, 0.1]]), q, settings)
-    except Exception:  # noqa: BLE001 -- the sweep's own blocks report it (compute_block)
-        pass
+    except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it (compute_block)
+        log.debug("warm-up failed: %s", exc)
     return time.perf_counter() - t0
 
 
@@ -242,7 +243,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     attach_saved_estimate(sweep, cube)
     todo = blocks_to_run(plan, cube)
     catalogue = store.Catalogue(store_root)
-    if not todo and store.cube.disagreement(sweep.cube, cube) is None:
+    if not todo and store.cube.disagreement(sweep.cube, cube) is None \
+            and not _needs_estimate(plan, sweep, cube):
         return _result(plan, sweep, catalogue, cube, blocks_run=0, t0=t0, timings={},
                        owner=owner)
     _check_space(plan, sweep, cube, todo)
@@ -265,7 +267,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         sink = BlockSink(plan, cube, journal, sweep, lease)
         run = _run_blocks_local if plan.path != "simulate" and scheduler is None \
             else _run_blocks
-        if todo:
+        if todo or _needs_estimate(plan, sweep, cube):
             run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
                 timings=timings, client=client)
         store.publish(cube, sweep.cube)
@@ -372,7 +374,8 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
     bar = _progress_bar(plan, len(todo), progress)
     t = time.perf_counter()
     with (nullcontext(client) if client is not None else dask_client(scheduler, workers)
-          ) as client:
+          ) as cluster_client:
+        client = cluster_client
         timings["cluster_s"] = time.perf_counter() - t
         t = time.perf_counter()
         warm = _warm_up_workers(client, plan, sink)
@@ -382,12 +385,19 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
             sink.started()
             _dispatch(client, plan, todo, sink, bar)
         timings["compute_s"] = time.perf_counter() - t
-        complete = not (sink.cube["status"].values == S.NOT_COMPUTED).any()
-        if todo and plan.path == "simulate" and complete:
+        if _needs_estimate(plan, sink.sweep, sink.cube) or \
+                (todo and plan.path == "simulate" and _complete(sink.cube)):
             t = time.perf_counter()
-            estimate = _error_estimate(plan, client, sink.cube)
+            try:
+                estimate = _error_estimate(plan, client, sink.cube)
+            except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
+                estimate = {"compared_with": None, "level": plan.numerics.label,
+                            "sample_points": 0, "change": {}, "promise": {},
+                            "warnings": [f"the error estimate could not be computed "
+                                         f"({type(exc).__name__}: {exc}); submit again"]}
             errors.attach(sink.cube, estimate)
-            _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
+            if estimate["compared_with"] is not None:
+                _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
             timings["error_estimate_s"] = time.perf_counter() - t
     bar.close()
 
@@ -416,6 +426,18 @@ def _write_json(path: Path, data: dict) -> None:
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path)
+
+
+def _complete(cube) -> bool:
+    return not (cube["status"].values == S.NOT_COMPUTED).any()
+
+
+def _needs_estimate(plan: Plan, sweep, cube) -> bool:
+    """A finished simulated sweep without a saved error estimate (its run was killed
+    between the last block and the estimate): it is computed before the sweep is done,
+    so that no cube goes unchecked."""
+    return (plan.path == "simulate" and _complete(cube)
+            and not (sweep.root / ESTIMATE_FILE).exists())
 
 
 def attach_saved_estimate(sweep, cube) -> bool:
@@ -569,7 +591,8 @@ def _attached_result(plan, sweep, row, t0) -> SubmitResult:
     if sweep.cube.exists():
         try:
             counts = _counts(store.open_cube(sweep.cube))
-            n_failed, n_ok = counts["failed_points"], counts["done_points"] - counts["failed_points"]
+            n_failed = counts["failed_points"]
+            n_ok = counts["done_points"] - n_failed
         except Exception as err:  # noqa: BLE001 -- the row's counts will do
             log.warning("cannot read %s: %s", sweep.cube, err)
     return SubmitResult(plan.sweep_id, sweep.cube, row["state"], n, n_ok, n_failed, 0,

@@ -73,6 +73,15 @@ def test_loose_numerics_warn_in_cube_status_and_query(tmp_path, spec_file):
     assert est["change"]["stick_fraction"] <= est["promise"]["stick_fraction"]
     assert not any(w.startswith("stick_fraction") for w in est["warnings"])
 
+    # a run killed between its last block and the estimate: the next submit computes the
+    # estimate (no block again) instead of leaving the cube unchecked
+    saved = next(root.glob("*/error_estimate.json"))
+    saved.unlink()
+    ditherlab("submit", str(spec_file(LOOSE_SPEC)), "--quiet", store=root, check=True)
+    assert saved.exists()
+    query = ditherlab("query", "gate-loose", "--var", "slip_fraction", store=root, check=True)
+    assert "slip_fraction: changed by" in query.stderr
+
 
 @pytest.mark.parametrize("level", ["standard"])
 def test_a_converged_sweep_has_no_warning(tmp_path, spec_file, level):
