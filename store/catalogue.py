@@ -379,7 +379,8 @@ class Catalogue:
         with self._connection() as con:
             cur = con.execute(
                 f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id AND owner = :_owner "
-                "AND state = 'running'", {**fields, "_id": sweep_id, "_owner": owner or owner_tag()})
+                "AND state = 'running'",
+                {**fields, "_id": sweep_id, "_owner": owner or owner_tag()})
         return cur.rowcount == 1
 
     def cancel_requested(self, sweep_id: str) -> bool:

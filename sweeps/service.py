@@ -33,7 +33,6 @@ import signal
 import sys
 import threading
 import time
-from pathlib import Path
 
 import store
 from store.catalogue import FINAL, HEARTBEAT_S, STALLED, Catalogue, owner_tag
@@ -177,7 +176,7 @@ def eta_s(row: dict, now: float | None = None) -> float | None:
 def format_seconds(s: float | None) -> str:
     if s is None:
         return "?"
-    s = int(round(s))
+    s = round(s)
     if s < 60:
         return f"{s} s"
     if s < 3600:
