@@ -388,6 +388,12 @@ class Catalogue:
         rows = self._query("SELECT cancel_requested FROM sweeps WHERE sweep_id = ?", (sweep_id,))
         return bool(rows and rows[0]["cancel_requested"])
 
+    def holds(self, sweep_id: str, owner: str | None = None) -> bool:
+        """True while ``owner`` (default: this process) holds the sweep's lease."""
+        rows = self._query("SELECT state, owner FROM sweeps WHERE sweep_id = ?", (sweep_id,))
+        return bool(rows) and rows[0]["state"] == "running" and \
+            rows[0]["owner"] == (owner or owner_tag())
+
     def finish(self, sweep_id: str, state: str, *, owner: str | None = None, message: str = "",
                **counts) -> tuple[bool, dict]:
         """End a run: set ``state`` (not ``running``), ``message`` and counts, and give the

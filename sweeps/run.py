@@ -270,7 +270,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         if todo or _needs_estimate(plan, sweep, cube):
             run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
                 timings=timings, client=client)
-        store.publish(cube, sweep.cube)
+        if sink.stopped != service.LEASE_LOST:   # else the new holder publishes
+            store.publish(cube, sweep.cube)
     except BaseException as exc:
         _abort(plan, sink, lease, exc, serving=stop is not None)
         raise
@@ -340,7 +341,8 @@ class BlockSink:
         store.fill_block(self.cube, payload)
         self.done.add(b)
         self.blocks_run += 1
-        if time.monotonic() - self.last_publish > PUBLISH_EVERY_S:
+        if time.monotonic() - self.last_publish > PUBLISH_EVERY_S and \
+                self.stopped != service.LEASE_LOST:
             store.publish(self.cube, self.sweep.cube)
             self.last_publish = time.monotonic()
         self._report()

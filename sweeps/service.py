@@ -113,6 +113,9 @@ class Lease:
         now = time.monotonic()
         if now - self._last_cancel_poll >= CANCEL_POLL_S:
             self._last_cancel_poll = now
+            if not self.catalogue.holds(self.sweep_id, self.owner):   # taken over
+                self.lost.set()
+                return LEASE_LOST
             self._cancelled = self.catalogue.cancel_requested(self.sweep_id)
             if self._cancelled:
                 return CANCELLED

@@ -366,3 +366,30 @@ def test_partial_and_failed_are_told_apart(tmp_path, monkeypatch, capsys):
     monkeypatch.undo()   # the crash is gone: submitting again resumes the 4 missing blocks
     res = submit(plan, crash, progress=False)
     assert (res.state, res.blocks_run) == ("done", 4)
+
+
+def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
+        tmp_path, monkeypatch):
+    """If another process takes the lease over (it judged this one dead), this runner
+    submits no further block and does not overwrite the new holder's row."""
+    import sweeps.run as R
+    from sweeps import parse_spec, submit
+
+    plan = make_plan(parse_spec(SMALL_AVG))
+    root = tmp_path / "store"
+    calls = []
+
+    def slow(scene, points, p, settings):
+        calls.append(1)
+        if len(calls) == 3:   # someone else now holds the sweep
+            store.Catalogue(root).update(plan.sweep_id, owner="elsewhere:1",
+                                         heartbeat=time.time())
+        time.sleep(0.3)
+        return REAL_COMPUTE_BLOCK(scene, points, p, settings)
+
+    monkeypatch.setattr(R, "compute_block", slow)
+    res = submit(plan, root, progress=False)
+    assert res.blocks_run == 3 and res.state == "running", res   # stopped after block 3
+    assert "took the sweep over" in res.message
+    row = _row(root, plan.sweep_id)
+    assert (row["state"], row["owner"]) == ("running", "elsewhere:1")
