@@ -1,0 +1,339 @@
+"""Faults a user can meet, through the real command line (issue 10): every one is survived
+or ends in one clear line on stderr with the README's exit status, and nothing finished is
+lost. The journal is the truth: a cube that disagrees with it is republished from it.
+
+Disk-full and read-only cases mount a tmpfs / a read-only bind mount (root only); they
+skip with the reason when this machine does not allow it."""
+import os
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import store
+from sweeps.plan import make_plan
+from sweeps.run import empty_cube, submit
+from sweeps.spec import load_spec
+
+from .conftest import AVERAGED_SPEC, BIN, ditherlab
+from .test_cluster_and_resume import RESUME_SPEC, _wait_for
+
+N_BLOCKS_AVG = 8   # AVERAGED_SPEC: 525 points in 8 blocks, computed in-process (no dask)
+
+
+def _cube(root: Path, spec) -> Path:
+    return root / spec.sweep_id / "cube.h5"
+
+
+def _results(path) -> xr.Dataset:
+    """The cube's variables and coordinates but the wall-clock cost."""
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        return ds.drop_vars("cost_s").drop_attrs().load()
+
+
+def _stderr_lines(proc) -> list[str]:
+    return [line for line in proc.stderr.splitlines() if line.strip()]
+
+
+def _ran(proc) -> int:
+    out = proc.stdout
+    return 0 if "already complete" in out else int(out.split("ran ")[1].split(" blocks")[0])
+
+
+@pytest.fixture(scope="module")
+def avg(tmp_path_factory):
+    """The averaged spec, its parsed form, and a clean store that ran it once (tests copy
+    it, never change it)."""
+    folder = tmp_path_factory.mktemp("avg")
+    path = folder / "spec.toml"
+    path.write_text(AVERAGED_SPEC)
+    clean = folder / "clean"
+    ditherlab("submit", str(path), "--quiet", store=clean, check=True)
+    return path, load_spec(path), clean
+
+
+def _mount(args: list[str], where: Path) -> None:
+    where.mkdir(parents=True, exist_ok=True)
+    proc = subprocess.run(["mount", *args, str(where)], capture_output=True, text=True)
+    if proc.returncode != 0:
+        pytest.skip(f"cannot mount here ({' '.join(args)}): {proc.stderr.strip() or 'not root'}")
+
+
+def _umount(where: Path) -> None:
+    # lazy: this process may still hold the catalogue open
+    subprocess.run(["umount", "--lazy", str(where)], capture_output=True)
+
+
+@pytest.fixture
+def tmpfs(tmp_path):
+    mounted = []
+
+    def mount(size: str) -> Path:
+        where = tmp_path / f"disk-{size}"
+        _mount(["-t", "tmpfs", "-o", f"size={size}", "tmpfs"], where)
+        mounted.append(where)
+        return where
+
+    yield mount
+    for where in mounted:
+        _umount(where)
+
+
+@pytest.fixture
+def read_only(tmp_path):
+    mounted = []
+
+    def mount(folder: Path) -> Path:
+        where = tmp_path / f"ro-{folder.name}"
+        where.mkdir()
+        proc = subprocess.run(["mount", "--bind", str(folder), str(where)], capture_output=True,
+                              text=True)
+        if proc.returncode != 0:
+            pytest.skip(f"cannot bind-mount here: {proc.stderr.strip()}")
+        mounted.append(where)
+        proc = subprocess.run(["mount", "-o", "remount,bind,ro", str(where)],
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            pytest.skip(f"cannot remount read-only here: {proc.stderr.strip()}")
+        return where
+
+    yield mount
+    for where in mounted:
+        _umount(where)
+
+
+# --- 1, 2: the cube disagrees with the journal ------------------------------------------
+
+def test_a_stale_cube_with_a_complete_journal_is_republished(avg, tmp_path):
+    """The state a submitter killed after its last journal write and before its final
+    publish leaves (measured: 'done, already complete; 256/256 ok' over 152 points of
+    status 1): the next submit republishes the cube from the journal."""
+    path, spec, clean = avg
+    root = tmp_path / "killed"
+    shutil.copytree(clean, root)
+    sweep = store.SweepDir(root, spec.sweep_id)
+    journal = store.Journal(sweep.journal)
+    plan = make_plan(spec)
+    store.publish(empty_cube(plan), sweep.cube)   # the last cube published: nothing in it
+    assert journal.done(plan.blocks) == set(range(N_BLOCKS_AVG))
+    proc = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert "done, already complete; 525/525 ok" in proc.stdout
+    assert "republished it from the journal" in proc.stderr
+    xr.testing.assert_identical(_results(sweep.cube), _results(_cube(clean, spec)))
+    again = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert "republished" not in again.stderr       # now they agree: nothing written
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "delete"])
+def test_a_damaged_cube_is_named_by_query_and_repaired_by_submit(avg, tmp_path, damage):
+    path, spec, clean = avg
+    root = tmp_path / "damaged"
+    shutil.copytree(clean, root)
+    cube = _cube(root, spec)
+    if damage == "truncate":
+        cube.write_bytes(cube.read_bytes()[:5000])
+    elif damage == "garbage":
+        cube.write_bytes(b"\x89HDF\r\n\x1a\n" + os.urandom(4000))
+    else:
+        cube.unlink()
+    proc = ditherlab("query", "e2e-avg", store=root)
+    assert proc.returncode == 1 and proc.stdout == ""
+    (line,) = _stderr_lines(proc)
+    if damage == "delete":
+        assert "has no cube yet" in line and "submit it again" in line
+    else:
+        assert "is unreadable" in line and "submit the spec again (ditherlab submit " in line
+        assert "to republish it from the journal" in line
+    repaired = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert "already complete" in repaired.stdout
+    xr.testing.assert_identical(_results(cube), _results(_cube(clean, spec)))
+    ditherlab("query", "e2e-avg", "--format", "csv", store=root, check=True)
+
+
+# --- 3: disk full ----------------------------------------------------------------------
+
+def test_disk_full_before_anything_is_one_line_not_a_segfault(avg, tmpfs):
+    """Measured before: 'RuntimeError: Disable slist on flush dest failure failed ... No
+    space left on device', then Segmentation fault (exit 139) on a 200 KB tmpfs."""
+    path, spec, clean = avg
+    disk = tmpfs("200k")
+    proc = ditherlab("submit", str(path), "--quiet", store=disk / "store")
+    assert proc.returncode == 1, proc.stderr
+    (line,) = _stderr_lines(proc)[1:]   # after the 'sweep ...: N points' line
+    assert line.startswith(f"ditherlab: no space left on device writing {disk}/store/")
+    assert "MB and submit again; the journal keeps the 0 finished blocks (of 8)" in line
+    assert "Traceback" not in proc.stderr
+    subprocess.run(["mount", "-o", "remount,size=4m", str(disk)], check=True)
+    ditherlab("submit", str(path), "--quiet", store=disk / "store", check=True)
+    xr.testing.assert_identical(_results(_cube(disk / "store", spec)),
+                                _results(_cube(clean, spec)))
+
+
+def test_disk_full_keeps_the_previous_cube_and_resumes_when_freed(avg, tmpfs):
+    path, spec, clean = avg
+    root = tmpfs("2m") / "store"
+    first = submit(make_plan(spec), root, progress=False, max_blocks=3)
+    assert first.blocks_run == 3
+    cube = _cube(root, spec)
+    before = cube.read_bytes()
+    filler = root.parent / "filler"
+    with open(filler, "wb") as f:                 # leave a few pages
+        f.write(b"\0" * max(0, store.layout.free_bytes(root) - 48 * 1024))
+    proc = ditherlab("submit", str(path), "--quiet", store=root)
+    assert proc.returncode == 1
+    (line,) = _stderr_lines(proc)[1:]
+    assert "no space left on device writing" in line
+    assert line.endswith("the journal keeps the 3 finished blocks (of 8)")
+    assert cube.read_bytes() == before            # the previous cube, untouched
+    assert not list(cube.parent.glob(".*.tmp-*"))
+    filler.unlink()
+    resumed = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert _ran(resumed) == N_BLOCKS_AVG - 3
+    xr.testing.assert_identical(_results(cube), _results(_cube(clean, spec)))
+
+
+@pytest.mark.slow
+def test_disk_filling_up_mid_run_stops_with_one_line_and_resumes(tmp_path, spec_file, tmpfs):
+    """A 32-block simulated sweep; another process fills the disk after 3 blocks."""
+    path = spec_file(RESUME_SPEC)
+    spec = load_spec(path)
+    root = tmpfs("3m") / "store"
+    proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(root)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    journal = root / spec.sweep_id / "journal"
+    _wait_for(lambda: len(list(journal.glob("block-*.npz"))) >= 3 or proc.poll() is not None,
+              300, "three journaled blocks", poll=0.02)
+    filler = root.parent / "filler"
+    subprocess.run(["dd", "if=/dev/zero", f"of={filler}", "bs=4k"], capture_output=True)
+    out, err = proc.communicate(timeout=300)
+    assert proc.returncode == 1, err
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith("ditherlab: no space left on device writing ") and \
+        "the journal keeps the " in last
+    kept = len(list(journal.glob("block-*.npz")))
+    store.open_cube(_cube(root, spec))            # readable
+    filler.unlink()
+    resumed = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert _ran(resumed) == 32 - kept
+
+
+# --- 4: bad journal blocks -------------------------------------------------------------
+
+def test_bad_journal_blocks_are_set_aside_and_recomputed(avg, tmp_path):
+    """Measured before: BadZipFile, or ValueError, on every later submit; wrong numbers
+    in a well-formed block read as data."""
+    path, spec, clean = avg
+    root = tmp_path / "bad"
+    shutil.copytree(clean, root)
+    journal = store.Journal(root / spec.sweep_id / "journal")
+
+    def rewrite(block_id, change):   # as another program would: plain np.savez
+        with np.load(journal.path(block_id)) as npz:
+            arrays = {k: npz[k] for k in npz.files if k != "_sha256"}
+        change(arrays)
+        with open(journal.path(block_id), "wb") as f:
+            np.savez(f, **arrays)
+
+    data = bytearray(journal.path(1).read_bytes())
+    data[len(data) // 3: len(data) // 3 + 64] = b"\xff" * 64
+    journal.path(1).write_bytes(bytes(data))                                   # flipped bytes
+    rewrite(2, lambda a: a.__setitem__("status", np.full_like(a["status"], 7)))  # bad codes
+    rewrite(3, lambda a: a.__setitem__("F_eff", a["F_eff"] * 0 + 1e9))         # wrong numbers
+    rewrite(4, lambda a: a.__setitem__("index", a["index"][:5]))               # wrong shape
+    proc = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert _ran(proc) == 4
+    warned = [line for line in _stderr_lines(proc) if "journal: block" in line]
+    assert len(warned) == 4 and all(line.startswith("ditherlab: warning: journal: block ")
+                                    and "recomputed" in line for line in warned)
+    assert len(list((journal.folder / "bad").iterdir())) == 4
+    xr.testing.assert_identical(_results(_cube(root, spec)), _results(_cube(clean, spec)))
+    assert "journal" not in ditherlab("submit", str(path), "--quiet", store=root).stderr
+
+
+# --- 5: store paths, read-only stores, a damaged catalogue, Ctrl-C ----------------------
+
+def test_read_commands_work_on_a_read_only_store_and_submit_says_why_not(avg, tmp_path,
+                                                                          read_only):
+    """Measured before: sqlite3.OperationalError for status and query on a read-only mount."""
+    path, spec, clean = avg
+    ro = read_only(clean)
+    before = sorted(p.name for p in clean.iterdir())
+    listing = ditherlab("status", store=ro, check=True)
+    assert spec.sweep_id in listing.stdout and "done" in listing.stdout
+    ditherlab("status", "e2e-avg", store=ro, check=True)
+    table = ditherlab("query", "e2e-avg", "--var", "F_eff", "--format", "csv", store=ro,
+                      check=True)
+    assert len(table.stdout.splitlines()) == 1 + 525
+    ditherlab("map", "e2e-avg", "--kind", "friction", "--sel", "v_d=0.1", "-o",
+              str(tmp_path / "f.png"), store=ro, check=True)
+    proc = ditherlab("submit", str(path), "--quiet", store=ro)
+    assert proc.returncode == 1
+    assert _stderr_lines(proc)[1:] == [
+        f"ditherlab: store {ro} is read-only (Read-only file system): cannot write there; "
+        "status, query and map still read it"]
+    assert sorted(p.name for p in clean.iterdir()) == before
+
+
+@pytest.mark.parametrize("case", ["a file", "under a file", "name too long"])
+def test_an_unusable_store_path_is_one_line_and_exit_2(tmp_path, spec_file, case):
+    target = {"a file": tmp_path / "file", "under a file": tmp_path / "file" / "store",
+              "name too long": tmp_path / ("x" * 300)}[case]
+    (tmp_path / "file").write_text("not a store")
+    for args in (("status",), ("query", "x"), ("submit", str(spec_file(AVERAGED_SPEC)),
+                                                 "--quiet")):
+        proc = ditherlab(*args, store=target)
+        assert proc.returncode == 2, (args, proc.stderr)
+        lines = [line for line in _stderr_lines(proc) if line.startswith("ditherlab:")]
+        assert len(lines) == 1 and "store path" in lines[0] and "Traceback" not in proc.stderr
+        assert len(lines[0]) < 300
+
+
+def test_a_damaged_catalogue_is_one_line_saying_how_to_rebuild_it(avg, tmp_path):
+    path, spec, clean = avg
+    root = tmp_path / "damaged"
+    shutil.copytree(clean, root)
+    catalogue = root / "catalogue.sqlite"
+    for extra in root.glob("catalogue.sqlite-*"):
+        extra.unlink()
+    catalogue.write_bytes(os.urandom(8192))
+    for args in (("status",), ("query", "e2e-avg"), ("submit", str(path), "--quiet")):
+        proc = ditherlab(*args, store=root)
+        assert proc.returncode == 1
+        assert _stderr_lines(proc)[-1] == (
+            f"ditherlab: the catalogue {catalogue} is damaged (file is not a database); "
+            f"move it aside (mv {catalogue} {catalogue}.damaged) and run the command again: "
+            "it is rebuilt from the cubes (queued sweeps must be submitted again)")
+    catalogue.rename(catalogue.with_name("catalogue.sqlite.damaged"))
+    assert spec.sweep_id in ditherlab("status", store=root, check=True).stdout
+
+
+def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_file):
+    """SIGINT to the whole process group, as a terminal's Ctrl-C: exit 130, one line, no
+    tracebacks from the dask workers; the next submit computes only the missing blocks."""
+    path = spec_file(RESUME_SPEC)
+    spec = load_spec(path)
+    root = tmp_path / "store"
+    journal = root / spec.sweep_id / "journal"
+    proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(root)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True)
+    _wait_for(lambda: len(list(journal.glob("block-*.npz"))) >= 2 or proc.poll() is not None,
+              300, "two journaled blocks", poll=0.02)
+    os.killpg(proc.pid, signal.SIGINT)
+    t0 = time.monotonic()
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and time.monotonic() - t0 < 60
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    last = err.strip().splitlines()[-1]
+    kept = len(list(journal.glob("block-*.npz")))
+    assert last == (f"ditherlab: interrupted; the journal keeps the {kept} finished blocks "
+                    "(of 32); submit the spec again to resume")
+    store.open_cube(root / spec.sweep_id / "cube.h5")
+    resumed = ditherlab("submit", str(path), "--quiet", store=root, check=True)
+    assert _ran(resumed) == 32 - kept
