@@ -360,8 +360,8 @@ def campaign(spec_text: str, work: Path, n_submit: int, n_serve: int, seed: int 
     trials = []
     for n, (target, mode, param) in enumerate(
             schedule(n_submit, n_serve, n_worker, len(plan.blocks), rng)):
-        if mode == "random":   # the machine's load changes: use the latest whole runs
-            param *= sorted(run_s[-3:])[len(run_s[-3:]) // 2]
+        if mode == "random":   # the machine's load changes: the fastest of the latest runs
+            param *= min(run_s[-3:])
         trial = run_trial(n, target, mode, param, spec_path, plan, keys,
                           store.SweepDir(clean, plan.sweep_id).cube, work)
         if mode == "after-last" and trial.killed:
