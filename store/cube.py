@@ -354,7 +354,7 @@ def open_cube(path) -> xr.Dataset:
         with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
             ds = f.load()
         _check_layout(ds, f"open_cube({path})")
-    except (OSError, KeyError, ValueError, RuntimeError) as err:  # h5py: torn file = KeyError/OSError
+    except (OSError, KeyError, ValueError, RuntimeError) as err:  # h5py: a torn file raises
         spec = path.parent / SPEC_NAME
         how = (f" (ditherlab submit {spec} --store {path.parent.parent})"
                if spec.exists() else "")
