@@ -404,7 +404,10 @@ def cmd_plan(args) -> int:
               f"per point  ->  {format_seconds(est.wall_s)} wall")
     root = store_root(args.store)
     previous = history.last_comparison(root)
-    history.record_estimate(root, plan.sweep_id, {e.level: e.wall_s for e in found})
+    try:
+        history.record_estimate(root, plan.sweep_id, {e.level: e.wall_s for e in found})
+    except OSError:   # a read-only store (or a full disk): shown, just not remembered
+        pass
     if previous:
         print(previous)
     return 0
