@@ -2,6 +2,10 @@
 
 Points are enumerated in C order over ``AXES = (W, omega, v_ref, v_d)``, the order of
 the cube's dimensions, so a point's flat index is its position in the cube.
+
+:func:`axis_size` and :func:`shape` read the sizes from the spec's fields without
+building any axis, so the point budget is checked in O(1) memory whatever ``num`` is
+(sweeps.spec.parse_spec); axes are built only after that check.
 """
 from __future__ import annotations
 
@@ -28,6 +32,16 @@ def default_axis(spec: Spec, axis: str) -> list[float]:
     return [system_defaults(spec.system)[AXIS_PARAM[axis]]]
 
 
+def axis_size(spec: Spec, axis: str) -> int:
+    """The number of values of one axis, from the spec's fields (nothing is built)."""
+    raw = getattr(spec.grid, axis)
+    if raw is None:
+        return 1
+    if isinstance(raw, Range):
+        return raw.num
+    return len(raw)
+
+
 def axis_values(spec: Spec, axis: str) -> np.ndarray:
     """The coordinate values of one axis, float64."""
     raw = getattr(spec.grid, axis)
@@ -45,7 +59,7 @@ def coords(spec: Spec) -> dict[str, np.ndarray]:
 
 
 def shape(spec: Spec) -> tuple[int, ...]:
-    return tuple(len(v) for v in coords(spec).values())
+    return tuple(axis_size(spec, axis) for axis in AXES)
 
 
 def points(spec: Spec) -> np.ndarray:
