@@ -186,7 +186,7 @@ def qoi_observer(sampled: bool):
         out[4] = obs[3] - obs[2]
 
     names = ("z", "e", "v", "v_mean_switch", "v_p2p_switch")
-    return Observer(4, names, False, False, init, start, observe, stop, finish), sample
+    return Observer(4, names, False, False, False, init, start, observe, stop, finish), sample
 
 
 class EngineQoI:
