@@ -1,16 +1,21 @@
 """ditherlab's numerics: friction laws, dither, systems, integrators, observables.
 
-Explicit re-exports of the public entry points (see docs/ARCHITECTURE.md).
+Explicit re-exports of the public entry points (see docs/ARCHITECTURE.md), loaded on first
+use: ``engine.provenance`` (hashlib only) must not pay for numba's import.
 """
-from .api import Simulation, simulate
-from .batch import POINT_AXES, BlockResult, run_block
-from .integrators import METHODS
-from .params import pack, unpack
-from .provenance import fingerprint
-from .scene import Scene
-from .settings import Settings
+import lazy_loader as _lazy
 
-__all__ = [
-    "METHODS", "POINT_AXES", "BlockResult", "Scene", "Settings", "Simulation", "fingerprint",
-    "pack", "run_block", "simulate", "unpack",
-]
+__getattr__, __dir__, __all__ = _lazy.attach(
+    __name__,
+    submodules=["analysis", "batch", "dither", "friction", "integrators", "jit", "observables",
+                "outputs", "params", "provenance", "scene", "settings", "status", "systems"],
+    submod_attrs={
+        "api": ["Simulation", "simulate"],
+        "batch": ["POINT_AXES", "BlockResult", "run_block"],
+        "integrators": ["METHODS"],
+        "params": ["pack", "unpack"],
+        "provenance": ["fingerprint"],
+        "scene": ["Scene"],
+        "settings": ["Settings"],
+    },
+)

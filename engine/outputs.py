@@ -2,6 +2,8 @@
 
 All quantities are non-dimensional for the slider system (force in units of
 ``k L``, velocity in ``omega_n L``, time in ``tau``) and SI for the contact system.
+``units`` are UDUNITS strings (CF): a non-dimensional quantity says ``"1"`` and its
+``long_name`` says what it is measured in (e.g. "in units of ... tau").
 """
 from __future__ import annotations
 
@@ -13,7 +15,8 @@ SIMULATE = {
     "presliding_fraction": ("fraction of time pre-sliding (0 < alpha < 1)", "1"),
     "slip_fraction": ("fraction of time sliding (alpha == 1: |z| >= (1 - slip_gap) z_ss)", "1"),
     "long_stick_fraction": ("fraction of time in sticking runs longer than long_stick", "1"),
-    "max_stick": ("longest uninterrupted sticking run", "tau"),
+    "max_stick": ("longest uninterrupted sticking run, in units of the non-dimensional time tau",
+                  "1"),
     "near_slip_fraction": ("fraction of time with alpha >= alpha_near", "1"),
     "alpha_hist": ("fraction of time with alpha in each of 10 equal bins of [0, 1]", "1"),
 }
@@ -21,7 +24,8 @@ SIMULATE = {
 VECTOR = {"alpha_hist": ("alpha_bin", 10)}
 AVERAGED = {
     "F_eff": ("averaged effective friction at slip velocity v_ref", "1"),
-    "max_real_eig": ("largest real part of the averaged Jacobian's eigenvalues", "1/tau"),
+    "max_real_eig": ("largest real part of the averaged Jacobian's eigenvalues, per unit of "
+                     "the non-dimensional time tau", "1"),
     "stable": ("averaged equilibrium stable (1) or unstable (0)", "1"),
 }
 HBM = {

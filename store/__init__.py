@@ -7,7 +7,7 @@ How the sweep runner uses it (the submitting process is the only writer)::
 
     import store
 
-    sweep = store.SweepDir(store_root, sweep_id)        # <store>/<id>/{cube.h5, journal/, spec.json}
+    sweep = store.SweepDir(store_root, sweep_id)        # <store>/<id>/{cube.nc, journal/, spec.json}
     sweep.write_spec(spec_json)
     cat = store.Catalogue(store_root)
     cat.register(sweep_id, name, spec_json, n_points, n_blocks, sweep.root)
@@ -64,76 +64,24 @@ layout / attrs
     ``canonical_json``, ``decode_attr``.
 """
 
-from .attrs import canonical_json
-from .attrs import decode as decode_attr
-from .catalogue import STATES, Catalogue
-from .cube import (
-    AXES,
-    FAILED,
-    NON_FINITE,
-    NOT_COMPUTED,
-    OK,
-    STATUS_MEANINGS,
-    empty_cube,
-    fill,
-    grid_points,
-    open_cube,
-    output_names,
-    pending_index,
-    publish,
-    status_counts,
-)
-from .journal import Journal, block_payload, fill_block, rebuild
-from .layout import SweepDir, atomic_write, default_store
-from .maps import friction_curves, stability_map, stick_slip_map
-from .query import (
-    NO_DATA,
-    PU,
-    STABLE,
-    SU,
-    effective_friction_curve,
-    select,
-    stability_chart,
-    table,
-    zone_map,
-)
+import lazy_loader as _lazy
 
-__all__ = [
-    "AXES",
-    "FAILED",
-    "NON_FINITE",
-    "NOT_COMPUTED",
-    "NO_DATA",
-    "OK",
-    "PU",
-    "STABLE",
-    "STATES",
-    "STATUS_MEANINGS",
-    "SU",
-    "Catalogue",
-    "Journal",
-    "SweepDir",
-    "atomic_write",
-    "block_payload",
-    "canonical_json",
-    "decode_attr",
-    "default_store",
-    "effective_friction_curve",
-    "empty_cube",
-    "fill",
-    "fill_block",
-    "friction_curves",
-    "grid_points",
-    "open_cube",
-    "output_names",
-    "pending_index",
-    "publish",
-    "rebuild",
-    "select",
-    "stability_chart",
-    "stability_map",
-    "status_counts",
-    "stick_slip_map",
-    "table",
-    "zone_map",
-]
+# Re-exports load their module on first use: `ditherlab status` needs the catalogue, not
+# xarray or matplotlib (a command's start-up time is its imports).
+__getattr__, __dir__, __all__ = _lazy.attach(
+    __name__,
+    submodules=["attrs", "catalogue", "cube", "journal", "layout", "maps", "query", "status"],
+    submod_attrs={
+        "attrs": ["canonical_json", "decode_attr"],
+        "catalogue": ["STATES", "Catalogue"],
+        "cube": ["AXES", "empty_cube", "fill", "grid_points", "open_cube", "output_names",
+                 "pending_index", "publish", "status_counts"],
+        "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
+        "layout": ["SweepDir", "atomic_write", "default_store"],
+        "maps": ["FORMATS", "figure_format", "friction_curves", "stability_map",
+                 "stick_slip_map"],
+        "query": ["NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select",
+                  "stability_chart", "table", "zone_map"],
+        "status": ["FAILED", "NON_FINITE", "NOT_COMPUTED", "OK", "STATUS_MEANINGS"],
+    },
+)

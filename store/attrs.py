@@ -76,3 +76,6 @@ def decode(value: Any) -> Any:
         except ValueError:
             return value
     return value
+
+
+decode_attr = decode   # the name store re-exports (``store.decode_attr``)

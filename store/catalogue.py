@@ -51,11 +51,11 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from . import attrs as A
-from .cube import FAILED, NON_FINITE, NOT_COMPUTED
-from .layout import CATALOGUE_NAME, CUBE_NAME, NoSpaceError, StoreError, check_store, writable
+from .layout import (CATALOGUE_NAME, CUBE_NAME, LEGACY_CUBE_NAME, NoSpaceError, StoreError,
+                     check_store, writable)
+from .status import FAILED, NON_FINITE, NOT_COMPUTED
 
 STATES = ("queued", "running", "done", "partial", "failed", "cancelled")
 FINAL = ("done", "partial", "failed", "cancelled")   # nobody works on the sweep
@@ -487,32 +487,34 @@ class Catalogue:
                 break
         raise LookupError(f"no sweep with id {sweep_id!r} in {self.path}")
 
-    def find(self, key: str) -> dict | None:
-        """Resolve what a user typed: an exact id, a name (the newest sweep of that
-        name), or a unique id prefix; ``None`` when nothing matches.
-
-        Raises ``LookupError`` for an id prefix that matches several sweeps.
-        """
+    def matches(self, key: str) -> list[dict]:
+        """Every sweep a user may mean by ``key``, newest first: the sweep of that exact
+        id, else every sweep of that name, else every sweep whose id starts with ``key``
+        (cubes without a row are adopted first when nothing matches). Deciding between
+        several is the caller's (``sweeps.lookup``: only current sweeps count)."""
         for attempt in range(2):
-            row = self._match(str(key))
-            if row is not None or (attempt == 0 and not self.scan()):
-                return row
-        return None
+            rows = self._match(str(key))
+            if rows or (attempt == 0 and not self.scan()):
+                return rows
+        return []
 
-    def _match(self, key: str) -> dict | None:
-        rows = self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
-        rows = rows or self._query(
-            "SELECT * FROM sweeps WHERE name = ? ORDER BY created DESC", (key,)
-        )
-        if rows:
-            return rows[0]
-        rows = self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?", (len(key), key))
+    def find(self, key: str) -> dict | None:
+        """The one sweep ``key`` names, ``None`` when nothing matches.
+
+        Raises ``LookupError`` listing the candidates when several match.
+        """
+        rows = self.matches(key)
         if len(rows) > 1:
             ids = ", ".join(r["sweep_id"] for r in rows)
-            raise LookupError(
-                f"id prefix {key!r} is ambiguous: it matches {ids}; type more characters"
-            )
+            raise LookupError(f"{key!r} is ambiguous: it matches {ids}; pass a sweep id")
         return rows[0] if rows else None
+
+    def _match(self, key: str) -> list[dict]:
+        newest = " ORDER BY created DESC, sweep_id"
+        return (self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
+                or self._query("SELECT * FROM sweeps WHERE name = ?" + newest, (key,))
+                or self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?" + newest,
+                               (len(key), key)))
 
     def list(self) -> list[dict]:
         """Every sweep, oldest first (after adopting cubes that have no row)."""
@@ -520,10 +522,13 @@ class Catalogue:
         return self._query("SELECT * FROM sweeps ORDER BY created, sweep_id")
 
     def scan(self) -> list[str]:
-        """Add a row for every ``<store>/<id>/cube.h5`` that has none; returns the new ids."""
+        """Add a row for every ``<store>/<id>/cube.nc`` (or older ``cube.h5``) that has none;
+        returns the new ids."""
         known = {r["sweep_id"] for r in self._query("SELECT sweep_id FROM sweeps")}
         added = []
-        for cube in sorted(self.root.glob(f"*/{CUBE_NAME}")):
+        cubes = {c.parent.name: c for name in (LEGACY_CUBE_NAME, CUBE_NAME)
+                 for c in sorted(self.root.glob(f"*/{name}"))}
+        for cube in cubes.values():
             if cube.parent.name in known:
                 continue
             row = _row_from_cube(cube)
@@ -582,6 +587,8 @@ def _count(name: str, value) -> int:
 
 def _row_from_cube(cube: Path) -> dict | None:
     """A catalogue row rebuilt from a cube's attributes and status counts."""
+    import xarray as xr   # only when a cube without a row is adopted
+
     try:
         with xr.open_dataset(cube, engine="h5netcdf", decode_timedelta=False) as ds:
             attrs = dict(ds.attrs)

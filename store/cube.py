@@ -29,16 +29,15 @@ import xarray as xr
 
 from . import attrs as A
 from .layout import SPEC_NAME, StoreError, atomic_write, remove_stale_temps
+from .status import FAILED, NON_FINITE, NOT_COMPUTED, OK, STATUS_MEANINGS  # noqa: F401
 
 AXES = ("W", "omega", "v_ref", "v_d")
 AXIS_META = {  # axis -> (long_name, default units); the contact system overrides units
     "W": ("dither velocity amplitude", "1"),
-    "omega": ("dither angular frequency", "rad per unit tau"),
+    "omega": ("dither angular frequency, rad per unit of the non-dimensional time tau", "1"),
     "v_ref": ("reference (slip) velocity", "1"),
     "v_d": ("bristle-damping characteristic velocity vd", "1"),
 }
-OK, NOT_COMPUTED, FAILED, NON_FINITE = 0, 1, 2, 3
-STATUS_MEANINGS = ("ok", "not_yet_computed", "failed", "non_finite")
 BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
     "status": (np.int8, NOT_COMPUTED, "point status", None),
     "cost_s": (np.float64, 0.0, "wall-clock cost of the point", "s"),
@@ -55,8 +54,10 @@ def _check_axis(name: str, values) -> np.ndarray:
         raise ValueError(
             f"coords[{name!r}] must be a non-empty 1-D list of numbers, got shape {arr.shape}"
         )
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"coords[{name!r}] must be finite, got {arr.tolist()}")
+    infinite_limit = name == "omega" and arr.size == 1 and arr[0] == np.inf
+    if not (np.all(np.isfinite(arr)) or infinite_limit):
+        raise ValueError(f"coords[{name!r}] must be finite (omega may be the single value inf: "
+                         f"an averaged theory's limit), got {arr.tolist()}")
     if np.unique(arr).size != arr.size:
         raise ValueError(
             f"coords[{name!r}] has repeated values (drop the duplicates), got {arr.tolist()}"

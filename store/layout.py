@@ -3,7 +3,7 @@
 A store is one folder::
 
     <store>/catalogue.sqlite          the catalogue of sweeps (store.catalogue)
-    <store>/<sweep-id>/cube.h5        the result cube (store.cube)
+    <store>/<sweep-id>/cube.nc        the result cube (store.cube; cube.h5 in older stores)
     <store>/<sweep-id>/journal/       one small file per finished block (store.journal)
     <store>/<sweep-id>/spec.json      the spec as submitted (written by the runner)
 
@@ -66,7 +66,8 @@ class NoSpaceError(StoreError, OSError):
         return self.strerror
 
 CATALOGUE_NAME = "catalogue.sqlite"
-CUBE_NAME = "cube.h5"
+CUBE_NAME = "cube.nc"
+LEGACY_CUBE_NAME = "cube.h5"   # stores written before 0.2 (same format, old suffix)
 JOURNAL_DIR = "journal"
 SPEC_NAME = "spec.json"
 ENV_STORE = "DITHERLAB_STORE"
@@ -94,7 +95,8 @@ class SweepDir:
     root
         ``<store>/<sweep-id>`` (created by ``write_spec`` or the first publish).
     cube, journal, spec
-        ``root / "cube.h5"``, ``root / "journal"``, ``root / "spec.json"``.
+        ``root / "cube.nc"`` (``cube.h5`` when only that exists: an older store),
+        ``root / "journal"``, ``root / "spec.json"``.
     """
 
     def __init__(self, store_root, sweep_id: str):
@@ -104,9 +106,15 @@ class SweepDir:
         self.store_root = Path(store_root)
         self.sweep_id = sid
         self.root = self.store_root / sid
-        self.cube = self.root / CUBE_NAME
         self.journal = self.root / JOURNAL_DIR
         self.spec = self.root / SPEC_NAME
+
+    @property
+    def cube(self) -> Path:
+        """The cube file: ``cube.nc``, or an older store's ``cube.h5`` while it is the only one."""
+        legacy = self.root / LEGACY_CUBE_NAME
+        return legacy if legacy.exists() and not (self.root / CUBE_NAME).exists() \
+            else self.root / CUBE_NAME
 
     def __repr__(self) -> str:
         return f"SweepDir({str(self.store_root)!r}, {self.sweep_id!r})"
@@ -128,7 +136,7 @@ class SweepDir:
 def temp_name(path: Path) -> Path:
     """A fresh temporary name next to ``path``: ``.<name>.tmp-<pid>-<random>``.
 
-    The leading dot hides it from ``*/cube.h5`` and ``block-*.npz`` globs; the pid
+    The leading dot hides it from ``*/cube.nc`` and ``block-*.npz`` globs; the pid
     lets ``remove_stale_temps`` tell a dead writer's leftover from a live one's.
     """
     path = Path(path)

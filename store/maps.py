@@ -1,8 +1,9 @@
-"""PNG figures of a cube in the style of the paper: Fig. 9, Fig. 14, Figs. 5/13.
+"""Figures of a cube in the style of the paper: Fig. 9, Fig. 14, Figs. 5/13.
 
 Drawn with matplotlib's object API on an Agg canvas (no pyplot, no global backend
 switch, safe in threads and on machines without a display). Every figure is
-``FIGSIZE`` inches at ``DPI`` (980 x 700 pixels), written atomically.
+``FIGSIZE`` inches at ``DPI`` (980 x 700 pixels for PNG), written atomically in the
+format its suffix names (``FORMATS``: png, pdf, svg) into an existing folder.
 
 - ``stability_map``: v_ref on x, W on y; PU and SU shaded, their boundaries drawn
   solid (PU) and dashed (SU) as in Fig. 9, and the line W = v_ref. The labels are
@@ -58,8 +59,31 @@ def _grid_on_top(ax) -> None:
     ax.grid(True, color="0.25", alpha=0.18, linewidth=0.6)
 
 
+FORMATS = ("png", "pdf", "svg")
+
+
+def figure_format(path) -> str:
+    """The format ``path``'s suffix asks for, after checking it and its folder.
+
+    Raises ``ValueError`` (one line: what to do) for another suffix or a missing folder:
+    a figure is never written in a format its name does not say, nor into a folder the
+    user did not make.
+    """
+    path = Path(path)
+    fmt = path.suffix.lower().lstrip(".")
+    if fmt not in FORMATS:
+        raise ValueError(f"cannot write {path}: the file name must end in "
+                         f"{', '.join('.' + f for f in FORMATS)} (got {path.suffix or 'none'})")
+    folder = path.parent
+    if not folder.is_dir():
+        raise ValueError(f"cannot write {path}: the folder {folder} does not exist "
+                         f"(create it first: mkdir -p {folder})")
+    return fmt
+
+
 def _save(fig: Figure, path) -> Path:
-    return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format="png", dpi=DPI))
+    fmt = figure_format(path)
+    return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format=fmt, dpi=DPI))
 
 
 def is_log_spaced(values: np.ndarray) -> bool:

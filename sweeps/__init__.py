@@ -1,9 +1,17 @@
-"""Sweep service: spec -> plan -> dask -> journaled HDF5 cube (DESIGN.md §3-5)."""
-from .api import open_sweep, run_sweep
-from .plan import Plan, make_plan
-from .run import SubmitResult, submit
-from .spec import Spec, SpecError, load_spec, parse_spec
-from .version import __version__
+"""Sweep service: spec -> plan -> dask -> journaled HDF5 cube (DESIGN.md §3-5).
 
-__all__ = ["Plan", "Spec", "SpecError", "SubmitResult", "__version__", "load_spec",
-           "make_plan", "open_sweep", "parse_spec", "run_sweep", "submit"]
+Re-exports load their module on first use, so ``ditherlab --help`` does not import dask,
+numba or xarray.
+"""
+import lazy_loader as _lazy
+
+__getattr__, __dir__, __all__ = _lazy.attach(
+    __name__,
+    submod_attrs={
+        "api": ["open_sweep", "run_sweep"],
+        "plan": ["Plan", "make_plan"],
+        "run": ["SubmitResult", "submit"],
+        "spec": ["Spec", "SpecError", "load_spec", "parse_spec"],
+        "version": ["__version__"],
+    },
+)

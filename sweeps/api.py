@@ -1,34 +1,74 @@
-"""The Python API: the same path as the command line, returning xarray objects."""
+"""The Python API: the command line's path, returning xarray objects, composable with dask.
+
+    res = sweeps.run_sweep("specs/fig14.toml", store="ditherlab-store")   # or a dict, a Spec
+    ds = sweeps.open_sweep(res.sweep_id, store="ditherlab-store", chunks={})   # lazy (dask)
+
+``run_sweep(..., client=client)`` runs on an existing ``dask.distributed.Client`` (a
+``LocalCluster``, a ``SpecCluster``, a dask-jobqueue ``SLURMCluster``'s client: README "On
+an HPC cluster"); ``scheduler=`` takes an address instead.
+"""
 from __future__ import annotations
 
 from pathlib import Path
 
-from .plan import make_plan
-from .run import SubmitResult, submit
-from .spec import DEFAULT_MAX_POINTS, load_spec
+from .lookup import catalogue, resolve_sweep, stale_note, store_root
+from .spec import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
-def run_sweep(spec, store: str | Path = "ditherlab-store", *, scheduler: str | None = None,
-              workers: int = 2, progress: bool = True,
-              max_points: int = DEFAULT_MAX_POINTS) -> SubmitResult:
-    """Validate, plan and run a sweep (a spec dict, or a .toml/.json path); resume it if
-    partial, return at once if complete. Open the cube with :func:`open_sweep`."""
-    plan = make_plan(load_spec(spec, max_points=max_points))
-    return submit(plan, store, scheduler=scheduler, workers=workers, progress=progress)
+def run_sweep(spec, store: str | Path | None = None, *, client=None,
+              scheduler: str | None = None, workers: int = 2, progress: bool = True,
+              max_points: int = DEFAULT_MAX_POINTS, dashboard: str | None = None):
+    """Validate, plan and run a sweep; resume it if partial, return at once if complete.
+
+    Parameters
+    ----------
+    spec
+        A :class:`sweeps.Spec`, a spec dict, or a ``.toml``/``.json`` path.
+    store
+        The store folder (default ``$DITHERLAB_STORE`` or ``./ditherlab-store``).
+    client
+        An existing ``dask.distributed.Client`` to compute on (it is left open). Else
+        ``scheduler`` (an address), else a LocalCluster of ``workers`` processes
+        (``dashboard``: its dashboard address, none by default).
+
+    Returns
+    -------
+    sweeps.SubmitResult
+        ``sweep_id``, ``state``, counts and ``cube_path``; open the cube with
+        :func:`open_sweep`. Raises :class:`sweeps.SpecError` for a refused spec.
+    """
+    from .plan import make_plan
+    from .run import submit
+
+    if not isinstance(spec, Spec):
+        spec = load_spec(spec, max_points=max_points)
+    return submit(make_plan(spec), store_root(store), scheduler=scheduler, workers=workers,
+                  progress=progress, client=client, dashboard=dashboard)
 
 
-def open_sweep(key: str, store: str | Path = "ditherlab-store"):
-    """The cube of a sweep (id, id prefix or name) as an in-memory ``xarray.Dataset``;
-    a ``UserWarning`` when it was made by another engine than the installed one."""
+def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
+    """The cube of a sweep (id, id prefix or name) as an ``xarray.Dataset``.
+
+    ``chunks=None`` (default) loads it into memory and closes the file; ``chunks={}`` or a
+    dict of sizes per axis opens it lazily as dask arrays (close it with ``ds.close()`` or
+    a ``with`` block). A ``UserWarning`` when it was made by another engine than the
+    installed one. Raises ``sweeps.errors.UserError`` when no sweep matches, and its
+    subclass ``AmbiguousSweepError`` (also a ``LookupError``) when a name fits several
+    current sweeps, listing them: pass an id.
+    """
     import warnings
+
+    import xarray as xr
 
     import store as _store
 
-    from .cli import resolve_sweep, stale_note
-
-    sweep_id, cube = resolve_sweep(Path(store), key)
-    ds = _store.open_cube(cube)
-    note = stale_note(_store.Catalogue(Path(store)).get(sweep_id), ds, Path(store))
+    root = store_root(store)
+    sweep_id, cube = resolve_sweep(root, key)
+    if chunks is None:
+        ds = _store.open_cube(cube)
+    else:
+        ds = xr.open_dataset(cube, engine="h5netcdf", chunks=chunks, decode_timedelta=False)
+    note = stale_note(catalogue(root).get(sweep_id), ds, root)
     if note:
         warnings.warn(note, stacklevel=2)
     return ds

@@ -27,6 +27,8 @@ def default_axis(spec: Spec, axis: str) -> list[float]:
     """The single value of an axis the spec does not sweep."""
     if axis == "omega" and spec.dither == "none":
         return [0.0]
+    if axis == "omega" and spec.method == "averaged":
+        return [np.inf]   # the averaged theory is the limit omega -> infinity (no omega value)
     if axis == "omega":
         return [1000.0]
     return [system_defaults(spec.system)[AXIS_PARAM[axis]]]

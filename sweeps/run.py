@@ -28,13 +28,13 @@ import store
 from engine import params as P
 from engine import status as S
 
-from . import errors, history, service
+from . import estimate as errest, history, service
 from .outputs import output_attrs
 from .plan import Plan
 from .version import __version__, results_fingerprint
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running
-ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (sweeps.errors)
+ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (sweeps.estimate)
 COUNTERS = ("status", "cost_s", "steps", "evals")
 
 log = logging.getLogger("ditherlab")
@@ -123,9 +123,15 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
 # --- clusters --------------------------------------------------------------------------
 
 @contextmanager
-def dask_client(scheduler: str | None = None, workers: int = 2):
+def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str | None = None):
     """A client on an existing cluster (``scheduler`` address) or on a LocalCluster of
     ``workers`` single-threaded processes.
+
+    ``dashboard`` is the address of the LocalCluster's dask dashboard (e.g. ``":8787"``,
+    needs bokeh: ``pip install 'ditherlab[dashboard]'``); its link is logged when it
+    starts. Without it there is no dashboard, and the scheduler's small HTTP server (health
+    checks) takes a free port: no "Port 8787 is already in use" warning when another
+    cluster runs on this machine.
 
     Not made dask's default scheduler: tasks are submitted to it explicitly, and as the
     default it would make xarray take a *distributed* lock for every netCDF write of the
@@ -139,10 +145,13 @@ def dask_client(scheduler: str | None = None, workers: int = 2):
         finally:
             client.close()
         return
+    http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": ":0"}}
     with _sigint_ignored():   # workers are born ignoring Ctrl-C: their submitter stops them
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None, silence_logs=logging.ERROR)
+                               dashboard_address=dashboard, silence_logs=logging.ERROR, **http)
     with cluster, Client(cluster, set_as_default=False) as client:
+        if dashboard:
+            log.info("dask dashboard: %s", client.dashboard_link)
         client.register_plugin(_ignore_sigint_plugin())   # ... and workers restarted later
         yield client
 
@@ -196,9 +205,27 @@ def cube_attrs(plan: Plan) -> dict:
         "engine_settings": plan.numerics.as_dict() if plan.path == "simulate" else {},
         "engine_scene": {k: (list(v) if isinstance(v, tuple) else v)
                          for k, v in vars(plan.scene).items()},
-        "engine_params": P.unpack(plan.params),
+        "engine_params": {k: v for k, v in P.unpack(plan.params).items()
+                          if k not in AXIS_PARAMS},   # the axes are the cube's coordinates
         "Conventions": "CF-1.8",
+        **software_versions(),
     }
+
+
+AXIS_PARAMS = ("W", "omega", "v_ref", "vd")
+
+
+def software_versions() -> dict[str, str]:
+    """``<package>_version`` of what computed the cube (the engine's own is its fingerprint)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = {"python_version": sys.version.split()[0]}
+    for pkg in ("numpy", "numba", "scipy", "dask", "xarray", "h5netcdf"):
+        try:
+            out[f"{pkg}_version"] = version(pkg)
+        except PackageNotFoundError:
+            out[f"{pkg}_version"] = "not installed"
+    return out
 
 
 def empty_cube(plan: Plan):
@@ -207,7 +234,10 @@ def empty_cube(plan: Plan):
     variables = {name: output_attrs(plan.path, name) for name in plan.outputs}
     units = {"omega": "rad/s", "W": "m/s", "v_ref": "m/s", "v_d": "m/s"} \
         if plan.spec.system == "contact" else None
-    return store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units)
+    names = {"omega": "dither angular frequency: inf, the averaged theory is the limit "
+                      "omega -> infinity"} if plan.path == "averaged" else None
+    return store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units,
+                            axis_long_names=names)
 
 
 # --- submit ----------------------------------------------------------------------------
@@ -221,7 +251,8 @@ def blocks_to_run(plan: Plan, cube) -> list[int]:
 
 def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
            workers: int = 2, progress: bool = True, max_blocks: int | None = None,
-           client=None, owner: str | None = None, stop=None) -> SubmitResult:
+           client=None, owner: str | None = None, stop=None,
+           dashboard: str | None = None) -> SubmitResult:
     """Run every block of ``plan`` not yet finished OK; publish the cube.
 
     Blocks are computed only under the sweep's lease (sweeps.service): when another live
@@ -229,7 +260,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     (taking the lease over if the holder dies first).
 
     ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
-    ``client`` is a dask client to use instead of starting a cluster; ``owner`` the lease
+    ``client`` is a dask client to use instead of starting a cluster (``dashboard``: the
+    address of a started LocalCluster's dashboard, see :func:`dask_client`); ``owner`` the lease
     owner tag (default this process's ``host:pid``); ``stop`` a ``threading.Event`` that,
     once set, ends the run after its in-flight blocks and re-queues the sweep (serve).
     """
@@ -269,7 +301,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
             else _run_blocks
         if todo or _needs_estimate(plan, sweep, cube):
             run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
-                timings=timings, client=client)
+                timings=timings, client=client, dashboard=dashboard)
         if sink.stopped != service.LEASE_LOST:   # else the new holder publishes
             store.publish(cube, sweep.cube)
     except BaseException as exc:
@@ -372,11 +404,11 @@ def _done_blocks(plan: Plan, cube) -> list[int]:
 
 
 def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
-                progress, timings, client=None) -> None:
+                progress, timings, client=None, dashboard=None) -> None:
     bar = _progress_bar(plan, len(todo), progress)
     t = time.perf_counter()
-    with (nullcontext(client) if client is not None else dask_client(scheduler, workers)
-          ) as cluster_client:
+    with (nullcontext(client) if client is not None
+          else dask_client(scheduler, workers, dashboard)) as cluster_client:
         client = cluster_client
         timings["cluster_s"] = time.perf_counter() - t
         t = time.perf_counter()
@@ -397,7 +429,7 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
                             "sample_points": 0, "change": {}, "promise": {},
                             "warnings": [f"the error estimate could not be computed "
                                          f"({type(exc).__name__}: {exc}); submit again"]}
-            errors.attach(sink.cube, estimate)
+            errest.attach(sink.cube, estimate)
             if estimate["compared_with"] is not None:
                 _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
             timings["error_estimate_s"] = time.perf_counter() - t
@@ -406,16 +438,16 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
 
 def _error_estimate(plan: Plan, client, cube) -> dict:
     """Re-run the error sample one accuracy level finer on the cluster, one task per
-    point (sweeps.errors), and compare."""
-    finer = errors.finer_numerics(plan)
-    index, pts = errors.sample(plan)
+    point (sweeps.estimate), and compare."""
+    finer = errest.finer_numerics(plan)
+    index, pts = errest.sample(plan)
     scene = plan.scene.with_(method=finer.integrator)
     futures = [client.submit(compute_block, scene, pts[i:i + 1], plan.params, finer.settings,
                              pure=False) for i in range(len(pts))]
     parts = client.gather(futures)
     result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
               if k != "error"}
-    return errors.compare(plan, cube, index, result, finer.label)
+    return errest.compare(plan, cube, index, result, finer.label)
 
 
 def _write_json(path: Path, data: dict) -> None:
@@ -446,7 +478,7 @@ def attach_saved_estimate(sweep, cube) -> bool:
     """Put the sweep's saved error estimate (if any) into ``cube``; True when there was one."""
     path = sweep.root / ESTIMATE_FILE
     try:
-        errors.attach(cube, json.loads(path.read_text()))
+        errest.attach(cube, json.loads(path.read_text()))
     except (OSError, ValueError, KeyError):
         return False
     return True
@@ -507,7 +539,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar) -> None
 
 
 def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
-                      progress, timings, client=None) -> None:
+                      progress, timings, client=None, dashboard=None) -> None:
     """The analysis paths cost microseconds per point: starting a cluster would cost
     more than the whole sweep, so they run in this process."""
     bar = _progress_bar(plan, len(todo), progress)

@@ -269,7 +269,7 @@ class _Signals:
 
 def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
           poll_s: float = SERVE_POLL_S, idle_exit_s: float | None = None,
-          progress: bool = False, say=None) -> int:
+          progress: bool = False, say=None, dashboard: str | None = None) -> int:
     """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
     (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
     from .plan import make_plan
@@ -330,7 +330,7 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
                 say(f"serve: running {sweep_id} '{plan.spec.name}': {plan.n_points} points in "
                     f"{len(plan.blocks)} blocks")
                 if client is None and plan.path == "simulate":
-                    client_cm = dask_client(scheduler, workers)
+                    client_cm = dask_client(scheduler, workers, dashboard)
                     client = client_cm.__enter__()
                 try:
                     res = submit(plan, root, scheduler=scheduler, workers=workers,

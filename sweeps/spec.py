@@ -47,6 +47,7 @@ from pydantic import (
     model_validator,
 )
 
+from .errors import MAX_LINE, MAX_PROBLEMS, SpecError  # noqa: F401  (re-exported)
 from .version import __version__
 
 SYSTEMS = ("slider", "contact")
@@ -62,24 +63,8 @@ MAX_AXIS_POINTS = 10_000_000      # num of one range, and values of one list axi
 MAX_DEPTH = 16                    # nesting of tables and lists (a spec needs 3)
 # a spec file: pure-Python tomllib reads ~1 MB of escapes per second, json 100x faster
 MAX_FILE_BYTES = {"TOML": 1_000_000, "JSON": 10_000_000}
-MAX_PROBLEMS = 20                 # lines of one refusal (then "... and N more")
 ECHO_CHARS = 80                   # an echoed value is cut to this many characters
 MIN_RTOL = 1e-14                  # double precision holds no tighter relative error
-MAX_LINE = 300                    # characters of one message line, whatever it echoes
-
-
-class SpecError(ValueError):
-    """A refused spec; ``problems`` holds one message per fault (at most
-    :data:`MAX_PROBLEMS` lines of at most :data:`MAX_LINE` characters)."""
-
-    def __init__(self, problems: list[str], more: int = 0):
-        lines = [p if len(p) <= MAX_LINE else p[:MAX_LINE - 3] + "..."
-                 for p in (" ".join(str(p).split()) for p in problems[:MAX_PROBLEMS])]
-        more += max(0, len(problems) - MAX_PROBLEMS)
-        if more:
-            lines.append(f"spec: ... and {more} more faults")
-        self.problems = problems = lines
-        super().__init__("invalid sweep spec:\n" + "\n".join(f"  - {p}" for p in problems))
 
 
 _ECHO = reprlib.Repr()
@@ -449,6 +434,10 @@ def _check_choices(spec: Spec) -> list[str]:
     if spec.system == "contact" and spec.dither == "sine-force":
         problems.append("dither: 'sine-force' needs a mass; the contact system (no inertia) "
                         "takes 'sine-velocity', 'square-velocity' or 'none'")
+    if spec.method == "averaged" and spec.grid.omega is not None:
+        problems.append("grid.omega: the averaged theory is the limit omega -> infinity and "
+                        "has no dither frequency; drop grid.omega (the cube's omega is inf) or "
+                        "use method = 'simulate'")
     theory = {"averaged": ("coulomb", "stribeck", "lugre"), "hbm": ("lugre",)}
     if spec.method in theory and spec.friction not in theory[spec.method]:
         problems.append(f"friction: method={spec.method!r} has no theory for {spec.friction!r} "
@@ -471,6 +460,8 @@ def _check_grid(spec: Spec) -> list[str]:
     problems = []
     for axis in AXES:
         raw = getattr(spec.grid, axis)
+        if raw is None:
+            continue   # a default value (the averaged path's omega is inf by design)
         values = axis_values(spec, axis)
         bad = values[~np.isfinite(values)]
         if bad.size:

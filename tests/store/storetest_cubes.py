@@ -65,7 +65,7 @@ V_REF = np.array([0.05, 0.1, 0.2, 0.4, 0.8, 1.0])
 def averaged_cube(W=W, stable=STABLE_GRID, with_stable=True):
     outputs = {
         "F_eff": ("averaged effective friction", "1"),
-        "max_real_eig": ("largest real part", "1/tau"),
+        "max_real_eig": ("largest real part, per unit tau", "1"),
     }
     if with_stable:
         outputs["stable"] = ("stable (1) or unstable (0)", "1")

@@ -54,13 +54,15 @@ def test_find_by_id_name_and_prefix(tmp_path):
     cat.register("aaaa2222", "demo", "{}", 1, 1, "y")  # same name, newer
     cat.register("bbbb3333", "other", "{}", 1, 1, "z")
     assert cat.find("aaaa1111")["sweep_id"] == "aaaa1111"
-    assert cat.find("demo")["sweep_id"] == "aaaa2222"
     assert cat.find("bbb")["sweep_id"] == "bbbb3333"
     assert cat.find("nothing") is None
-    with pytest.raises(
-        LookupError, match="id prefix 'aaaa' is ambiguous: it matches aaaa1111, aaaa2222"
-    ):
-        cat.find("aaaa")
+    # a name given to two sweeps, or a short prefix: every candidate, newest first, and
+    # find() refuses to guess (sweeps.lookup then prefers the one current sweep, if any)
+    assert [r["sweep_id"] for r in cat.matches("demo")] == ["aaaa2222", "aaaa1111"]
+    for key in ("demo", "aaaa"):
+        with pytest.raises(LookupError, match=f"'{key}' is ambiguous: it matches "
+                           "aaaa2222, aaaa1111; pass a sweep id"):
+            cat.find(key)
     assert [r["sweep_id"] for r in cat.list()] == ["aaaa1111", "aaaa2222", "bbbb3333"]
 
 

@@ -12,16 +12,16 @@ from store import attrs as A
 
 
 def test_layout_follows_design_section_4(cube, tmp_path):
-    path = store.publish(cube, tmp_path / "s" / "cube.h5")
+    path = store.publish(cube, tmp_path / "s" / "cube.nc")
     ds = xr.open_dataset(path, engine="h5netcdf")  # the contract: plain xarray can read it
     try:
         assert tuple(ds.dims) == store.AXES
         assert [ds.sizes[a] for a in store.AXES] == [len(COORDS[a]) for a in store.AXES]
         for name in [*OUTPUTS, "status", "cost_s", "steps", "evals"]:
             assert ds[name].dims == store.AXES
-        assert ds["omega"].attrs == {
-            "long_name": "dither angular frequency",
-            "units": "rad per unit tau",
+        assert ds["omega"].attrs == {   # UDUNITS units (CF); the meaning is in long_name
+            "long_name": "dither angular frequency, rad per unit of the non-dimensional time tau",
+            "units": "1",
         }
         assert all(set(ds[a].attrs) == {"long_name", "units"} for a in store.AXES)
         assert ds["F_mean"].dtype == np.float64
@@ -66,7 +66,7 @@ def test_axis_units_and_long_names_can_be_overridden():
 def test_roundtrip_is_identical(cube, tmp_path):
     index = np.array([0, 5, 17, len(store.grid_points(cube)) - 1])
     store.fill(cube, index, **block_arrays(cube, index))
-    path = store.publish(cube, tmp_path / "cube.h5")
+    path = store.publish(cube, tmp_path / "cube.nc")
     back = store.open_cube(path)
     xr.testing.assert_identical(cube, back)
     store.publish(back, path)  # republishing a reopened cube (with file encodings) is stable
@@ -208,7 +208,7 @@ def test_open_cube_errors(tmp_path):
 
 
 def test_open_cube_names_an_unreadable_file(tmp_path):
-    torn = tmp_path / "cube.h5"
+    torn = tmp_path / "cube.nc"
     torn.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 1000)
     with pytest.raises(ValueError, match="is unreadable .*submit the spec again"):
         store.open_cube(torn)

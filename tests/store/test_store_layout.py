@@ -10,7 +10,7 @@ def test_sweep_dir_paths_and_spec(tmp_path):
     sweep = store.SweepDir(tmp_path, "b305ba3e9216")
     assert sweep.root == tmp_path / "b305ba3e9216"
     assert (sweep.cube.name, sweep.journal.name, sweep.spec.name) == (
-        "cube.h5",
+        "cube.nc",
         "journal",
         "spec.json",
     )
@@ -41,3 +41,14 @@ def test_atomic_write_failure_leaves_nothing(tmp_path):
     with pytest.raises(RuntimeError, match="boom"):
         store.atomic_write(tmp_path / "f.txt", fail)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_older_stores_with_cube_h5_still_open(tmp_path):
+    """Stores written before 0.2 named the cube ``cube.h5``: it stays the sweep's cube (and is
+    adopted by the catalogue) until a ``cube.nc`` exists beside it."""
+    sweep = store.SweepDir(tmp_path, "0123456789ab")
+    sweep.root.mkdir()
+    (sweep.root / "cube.h5").write_bytes(b"")
+    assert sweep.cube.name == "cube.h5"
+    (sweep.root / "cube.nc").write_bytes(b"")
+    assert sweep.cube.name == "cube.nc"

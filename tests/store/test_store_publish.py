@@ -35,14 +35,14 @@ def _temps(folder: Path) -> list[Path]:
 
 
 def test_publish_leaves_only_the_cube(cube, tmp_path):
-    path = store.publish(cube, tmp_path / "sweep" / "cube.h5")
+    path = store.publish(cube, tmp_path / "sweep" / "cube.nc")
     store.publish(cube, path)  # replacing an existing cube
-    assert sorted(p.name for p in path.parent.iterdir()) == ["cube.h5"]
+    assert sorted(p.name for p in path.parent.iterdir()) == ["cube.nc"]
 
 
 def test_writer_dead_before_rename_leaves_old_cube_readable(cube, tmp_path):
-    path = store.publish(cube, tmp_path / "cube.h5")
-    orphan = temp_name(path).with_name(f".cube.h5.tmp-{_dead_pid()}-deadbeef")
+    path = store.publish(cube, tmp_path / "cube.nc")
+    orphan = temp_name(path).with_name(f".cube.nc.tmp-{_dead_pid()}-deadbeef")
     orphan.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 1000)  # a torn HDF5 file, never renamed
     xr.testing.assert_identical(store.open_cube(path), cube)
     index = np.arange(5)
@@ -53,7 +53,7 @@ def test_writer_dead_before_rename_leaves_old_cube_readable(cube, tmp_path):
 
 
 def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatch):
-    path = store.publish(cube, tmp_path / "cube.h5")
+    path = store.publish(cube, tmp_path / "cube.nc")
     before = path.read_bytes()
 
     def full(self, data):   # the disk fills up half-way through the temporary file
@@ -62,7 +62,7 @@ def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatc
         raise OSError(errno.ENOSPC, "No space left on device")
 
     monkeypatch.setattr(Path, "write_bytes", full)
-    with pytest.raises(NoSpaceError, match=r"no space left on device writing .*cube.h5: "
+    with pytest.raises(NoSpaceError, match=r"no space left on device writing .*cube.nc: "
                        r"free \d+\.\d MB and submit again"):
         store.publish(make_cube(), path)
     monkeypatch.undo()
@@ -70,7 +70,7 @@ def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatc
 
 
 def test_publish_checks_free_space_before_writing(cube, tmp_path, monkeypatch):
-    path = store.publish(cube, tmp_path / "cube.h5")
+    path = store.publish(cube, tmp_path / "cube.nc")
     before = path.read_bytes()
     monkeypatch.setattr(layout, "free_bytes", lambda p: 10_000)
     with pytest.raises(NoSpaceError) as err:
@@ -110,7 +110,7 @@ def _kill_mid_write(path: Path, fraction: float) -> tuple[subprocess.Popen, int]
 
 @pytest.mark.parametrize("fraction", [0.15, 0.6])
 def test_sigkill_mid_publish_leaves_previous_generation(tmp_path, fraction):
-    path = tmp_path / "sweep" / "cube.h5"
+    path = tmp_path / "sweep" / "cube.nc"
     proc, last_done = _kill_mid_write(path, fraction)
     assert proc.returncode == -signal.SIGKILL
     assert _temps(path.parent), "the writer should have died between create and rename"
@@ -126,7 +126,7 @@ def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, t
     """What submit compares before it trusts a published cube (issue 10)."""
     from store.cube import disagreement
 
-    path = store.publish(cube, tmp_path / "cube.h5")
+    path = store.publish(cube, tmp_path / "cube.nc")
     assert disagreement(path, cube) is None
     assert disagreement(tmp_path / "none.h5", cube) == "the cube is missing"
     filled = cube.copy(deep=True)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import store
-from sweeps import errors
+from sweeps import estimate as errors
 from sweeps.accuracy import PROMISE_OVERRIDES, TARGET_ERROR, promise
 
 from .conftest import ditherlab

@@ -70,7 +70,7 @@ def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
                 p.wait(timeout=20)
             except subprocess.TimeoutExpired:
                 os.kill(p.pid, signal.SIGKILL)
-    cube = f"{spec.sweep_id}/cube.h5"
+    cube = f"{spec.sweep_id}/cube.nc"
     assert_same_results(results(local / cube), results(remote / cube))
 
 
@@ -99,7 +99,7 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
     before = done()
     assert 3 <= before < n_blocks, f"{before} blocks done before the kill"
 
-    cube = crashed / spec.sweep_id / "cube.h5"
+    cube = crashed / spec.sweep_id / "cube.nc"
     with xr.open_dataset(cube, engine="h5netcdf") as ds:   # the published cube is readable
         assert set(np.unique(ds["status"].values)) <= {0, 1}
     # the catalogue row still says running, but its owner is dead: status says stalled
@@ -114,4 +114,4 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file):
     detail = ditherlab("status", spec.sweep_id, store=crashed, check=True).stdout
     assert "state: done" in detail and "owner: \n" in detail + "\n", detail
     ditherlab("submit", str(path), "--quiet", store=clean, check=True)
-    assert_same_results(results(cube), results(clean / spec.sweep_id / "cube.h5"))
+    assert_same_results(results(cube), results(clean / spec.sweep_id / "cube.nc"))

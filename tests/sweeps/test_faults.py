@@ -27,7 +27,7 @@ N_BLOCKS_AVG = 8   # AVERAGED_SPEC: 525 points in 8 blocks, computed in-process 
 
 
 def _cube(root: Path, spec) -> Path:
-    return root / spec.sweep_id / "cube.h5"
+    return root / spec.sweep_id / "cube.nc"
 
 
 def _results(path) -> xr.Dataset:
@@ -334,6 +334,6 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
     kept = len(list(journal.glob("block-*.npz")))
     assert last == (f"ditherlab: interrupted; the journal keeps the {kept} finished blocks "
                     "(of 32); submit the spec again to resume")
-    store.open_cube(root / spec.sweep_id / "cube.h5")
+    store.open_cube(root / spec.sweep_id / "cube.nc")
     resumed = ditherlab("submit", str(path), "--quiet", store=root, check=True)
     assert _ran(resumed) == 32 - kept

@@ -13,7 +13,7 @@ import xarray as xr
 
 from engine import jit, provenance
 from store.catalogue import _SCHEMA, Catalogue
-from sweeps import cli, version
+from sweeps import cli, lookup, version
 from sweeps.spec import parse_spec
 
 FP_A, FP_B = "aaaaaaaaaaaa", "bbbbbbbbbbbb"
@@ -100,7 +100,7 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     old_id = out.split(":")[0]
     code, out, _ = run(capsys, "submit", str(spec), "--quiet", *st)
     assert code == 0 and "already complete" in out and out.startswith(old_id)
-    with xr.open_dataset(tmp_path / "store" / old_id / "cube.h5", engine="h5netcdf") as ds:
+    with xr.open_dataset(tmp_path / "store" / old_id / "cube.nc", engine="h5netcdf") as ds:
         assert ds.attrs["engine_fingerprint"] == RA
     code, out, err = run(capsys, "status", *st)
     assert "stale" not in out
@@ -110,13 +110,13 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     RB = version.results_fingerprint()
     assert RA != RB
     code, out, _ = run(capsys, "status", *st)
-    assert code == 0 and f"done ({cli.STALE})" in out
+    assert code == 0 and f"done ({lookup.STALE})" in out
     code, out, err = run(capsys, "query", "fp-avg", "--var", "F_eff", "--format", "csv", *st)
     assert code == 0 and out.startswith("W,")                # still answers ...
     warnings = [line for line in err.splitlines() if "warning" in line]
     assert len(warnings) == 1 and RA in warnings[0] and RB in warnings[0]  # ... one line
     code, out, _ = run(capsys, "status", old_id, *st)
-    assert f"state: done ({cli.STALE})" in out
+    assert f"state: done ({lookup.STALE})" in out
     assert f"made by engine {RA}, the installed engine is {RB}" in out
     assert "ditherlab submit SPEC" in out
 
@@ -125,14 +125,14 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     assert code == 0 and "already complete" not in out and "ran " in out
     new_id = out.split(":")[0]
     assert new_id != old_id
-    with xr.open_dataset(tmp_path / "store" / new_id / "cube.h5", engine="h5netcdf") as ds:
+    with xr.open_dataset(tmp_path / "store" / new_id / "cube.nc", engine="h5netcdf") as ds:
         assert ds.attrs["engine_fingerprint"] == RB
     code, out, _ = run(capsys, "status", *st)
     lines = {line.split()[0]: line for line in out.splitlines()[1:]}
-    assert cli.STALE in lines[old_id] and cli.STALE not in lines[new_id]
+    assert lookup.STALE in lines[old_id] and lookup.STALE not in lines[new_id]
 
     # the name now resolves to the current-engine sweep, without a warning
-    assert cli.resolve_sweep(tmp_path / "store", "fp-avg")[0] == new_id
+    assert lookup.resolve_sweep(tmp_path / "store", "fp-avg")[0] == new_id
     code, out, err = run(capsys, "query", "fp-avg", "--var", "F_eff", *st)
     assert code == 0 and "warning" not in err
     code, out, err = run(capsys, "map", old_id, "--kind", "friction", "-o",
@@ -146,7 +146,7 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
     con.commit()
     con.close()
     rows = {r["sweep_id"]: r for r in Catalogue(tmp_path / "store").list()}
-    assert cli.is_stale(rows[old_id]) and not cli.is_stale(rows[new_id])
+    assert lookup.is_stale(rows[old_id]) and not lookup.is_stale(rows[new_id])
 
 
 def test_old_catalogues_gain_the_fingerprint_column(tmp_path):

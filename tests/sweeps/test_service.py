@@ -119,7 +119,7 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
     fast_id = proc.stdout.split(":")[0]
     assert proc.stdout.strip() == f"{fast_id}: queued"
     assert "no `ditherlab serve` is running" in proc.stderr
-    assert (root / fast_id / "spec.json").exists() and not (root / fast_id / "cube.h5").exists()
+    assert (root / fast_id / "spec.json").exists() and not (root / fast_id / "cube.nc").exists()
     assert _row(root, fast_id)["state"] == "queued"
     listing = run_cli("status", store_root=root, env=env).stdout
     assert "queued" in listing and "wait for `ditherlab serve`" in listing, listing
@@ -142,7 +142,7 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
     for sid in (fast_id, avg_id):
         row = _row(root, sid)
         assert (row["owner"], row["done_blocks"]) == ("", row["n_blocks"]), row
-        with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:
+        with xr.open_dataset(root / sid / "cube.nc", engine="h5netcdf") as ds:
             assert (ds["status"] == 0).all()
     assert set(_computed(tmp_path / "blocks.log").values()) == {1}
     # submitting a finished sweep detached again changes nothing
@@ -177,7 +177,7 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
         assert serve.stop() == 0, serve.text()
     finally:
         serve.kill()
-    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:   # readable
+    with xr.open_dataset(root / sid / "cube.nc", engine="h5netcdf") as ds:   # readable
         assert int((ds["status"] == 0).sum()) == k
         assert set(np.unique(ds["status"].values)) == {0, 1}
     # submitting again resumes: only the blocks the journal lacks
@@ -206,7 +206,7 @@ def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_fil
     assert row["state"] == "queued" and row["owner"] == "" and "re-queued" in row["message"]
     assert 3 <= k < N_SLOW and row["done_blocks"] == k, (k, row)
     assert "SIGTERM" in serve.text() and "queued" in serve.text()
-    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:   # readable
+    with xr.open_dataset(root / sid / "cube.nc", engine="h5netcdf") as ds:   # readable
         assert int((ds["status"] == 0).sum()) == k   # every journaled block is in the cube
     assert store.Catalogue(root).servers() == []
 
@@ -238,7 +238,7 @@ def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
     assert "stalled" in listing and "is gone" in listing, listing
     detail = run_cli("status", sid, store_root=root, env=env).stdout
     assert "state: stalled" in detail and "submit the spec again to resume" in detail, detail
-    with xr.open_dataset(root / sid / "cube.h5", engine="h5netcdf") as ds:
+    with xr.open_dataset(root / sid / "cube.nc", engine="h5netcdf") as ds:
         assert set(np.unique(ds["status"].values)) <= {0, 1}
 
     # two submitters race to resume it: one takes the lease over, the other attaches
@@ -284,8 +284,8 @@ def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env
     assert [counts[key] for key in keys] == [1] * len(keys), counts
     clean_env = {k: v for k, v in env.items() if k != "DITHERLAB_BLOCK_LOG"}
     run_cli("submit", str(path), "--quiet", store_root=clean, env=clean_env)
-    (cube,) = shared.glob("*/cube.h5")
-    assert_same_results(results(cube), results(clean / cube.parent.name / "cube.h5"))
+    (cube,) = shared.glob("*/cube.nc")
+    assert_same_results(results(cube), results(clean / cube.parent.name / "cube.nc"))
 
 
 def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, env):

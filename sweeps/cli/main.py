@@ -1,0 +1,210 @@
+"""The ``ditherlab`` command line (DESIGN.md §5): the parser, and the promise that every
+fault ends in one line.
+
+    ditherlab submit SPEC.toml [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
+                               [--detach]
+    ditherlab serve [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
+    ditherlab status [SWEEP]
+    ditherlab cancel SWEEP [--wait]
+    ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
+    ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE
+    ditherlab plan SPEC.toml [--record]
+    ditherlab --version;  -v / -q on every command
+
+Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments) was refused,
+130 interrupted. Imports stay inside the commands: ``--help`` and ``status`` start in a
+fraction of a second (no dask, numba, xarray or matplotlib).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from contextlib import contextmanager
+
+from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
+from .reading import cmd_map, cmd_query, cmd_status
+from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
+
+DEFAULT_MAX_POINTS = 250_000   # sweeps.spec.DEFAULT_MAX_POINTS (a test checks they agree)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="ditherlab", description="Parameter sweeps of friction "
+                                 "dynamics under dither: submit, inspect, query, draw.")
+    ap.add_argument("--version", action="version", version=f"ditherlab {_version()}")
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--store", help="store folder (default $DITHERLAB_STORE or "
+                        "./ditherlab-store)")
+    talk = common.add_mutually_exclusive_group()
+    talk.add_argument("-v", "--verbose", action="store_true",
+                      help="also say what happens inside (timings, cluster, blocks)")
+    talk.add_argument("-q", "--quiet", action="store_true",
+                      help="only results, warnings and errors (no progress bar)")
+    sub = ap.add_subparsers(dest="command", required=True)
+    add_scene_commands = _scene_hook()
+
+    p = sub.add_parser("submit", parents=[common], help="run a sweep spec (resumes a partial one)")
+    p.add_argument("spec", help="spec file (.toml or .json)")
+    _cluster_options(p)
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, help="point budget")
+    p.add_argument("--detach", action="store_true",
+                   help="queue the sweep for `ditherlab serve` and return its id at once")
+    p.set_defaults(func=cmd_submit)
+
+    p = sub.add_parser("serve", parents=[common],
+                       help="run queued sweeps, oldest first, until SIGTERM or Ctrl-C")
+    _cluster_options(p)
+    p.set_defaults(func=cmd_serve)
+
+    p = sub.add_parser("cancel", parents=[common],
+                       help="cancel a queued sweep, or stop a running one after its blocks "
+                       "in flight (the journal is kept; submitting again resumes)")
+    p.add_argument("sweep")
+    p.add_argument("--wait", action="store_true", help="return once the run has stopped")
+    p.set_defaults(func=cmd_cancel)
+
+    p = sub.add_parser("status", parents=[common], help="list sweeps, or show one")
+    p.add_argument("sweep", nargs="?")
+    p.set_defaults(func=cmd_status)
+
+    p = sub.add_parser("query", parents=[common], help="print a cube's values")
+    p.add_argument("sweep")
+    p.add_argument("--var", help="variable (default: all outputs)")
+    p.add_argument("--sel", action="append", metavar="AXIS=VALUE", help="nearest-point selection")
+    p.add_argument("--format", choices=("table", "csv", "json"), default="table")
+    p.set_defaults(func=cmd_query)
+
+    p = sub.add_parser("map", parents=[common], help="draw a map from a cube (png, pdf, svg)")
+    p.add_argument("sweep")
+    p.add_argument("--kind", required=True, choices=("stick-slip", "stability", "friction"))
+    p.add_argument("--sel", action="append", metavar="AXIS=VALUE")
+    p.add_argument("-o", "--output", required=True,
+                   help="file to write: .png, .pdf or .svg, in an existing folder")
+    p.set_defaults(func=cmd_map)
+
+    p = sub.add_parser("plan", parents=[common],
+                       help="what a spec will run, and its cost per accuracy level")
+    p.add_argument("spec")
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
+    p.add_argument("--record", action="store_true",
+                   help="remember the estimates in the store, so that the next plan says how "
+                   "far off they were (plan writes nothing otherwise)")
+    p.set_defaults(func=cmd_plan)
+    if add_scene_commands is not None:
+        add_scene_commands(sub, common)
+    return ap
+
+
+def _cluster_options(p) -> None:
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
+    where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    p.add_argument("--dashboard", metavar="ADDR",
+                   help="start the local cluster's dask dashboard at ADDR (e.g. :8787; needs "
+                   "bokeh) and print its link; default: no dashboard")
+
+
+def _scene_hook():
+    """The gallery's ``scenes``/``gallery`` commands, once that package exists (issue 12):
+    a function ``sweeps.gallery.cli.add_commands(subparsers, common)``."""
+    try:
+        from ..gallery.cli import add_commands
+    except ImportError:
+        return None
+    return add_commands
+
+
+def _version() -> str:
+    from ..version import __version__
+
+    return __version__
+
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run one command; every fault ends in one line on stderr and the exit status of the
+    README (0 ok, 1 failed, 2 refused, 130 interrupted), never a traceback
+    (``DITHERLAB_DEBUG=1`` shows the traceback of an unexpected error)."""
+    args = build_parser().parse_args(argv)
+    if getattr(args, "workers", 1) is not None and getattr(args, "workers", 1) < 1:
+        print("ditherlab: --workers must be >= 1", file=sys.stderr)
+        return EXIT_REFUSED
+    verbosity = -1 if getattr(args, "quiet", False) else int(getattr(args, "verbose", False))
+    with _one_line_warnings(verbosity):
+        try:
+            return args.func(args)
+        except SpecError as exc:
+            return _fail(exc, EXIT_REFUSED)
+        except (UserError, Interrupted) as exc:
+            return _fail(exc, exc.exit_status)
+        except KeyboardInterrupt:
+            return _fail("interrupted", EXIT_INTERRUPTED)
+        except Exception as exc:  # noqa: BLE001 -- the one-line promise (README)
+            return _fail_unexpected(exc)
+
+
+def _fail(message, status: int) -> int:
+    print(f"ditherlab: {message}", file=sys.stderr)
+    return status
+
+
+def _fail_unexpected(exc: Exception) -> int:
+    """Store faults (disk full, read-only, damaged files), OS and SQLite errors, and bugs:
+    one line each."""
+    import sqlite3
+
+    import store
+
+    if os.environ.get("DITHERLAB_DEBUG"):
+        raise exc
+    if isinstance(exc, store.layout.StoreError):
+        return _fail(exc, exc.exit_status)
+    if isinstance(exc, OSError):
+        where = f" ({exc.filename})" if exc.filename else ""
+        return _fail(f"{exc.strerror or exc}{where}", EXIT_FAILED)
+    if isinstance(exc, sqlite3.Error):
+        if "full" in str(exc):   # SQLite's "database or disk is full"
+            return _fail(f"no space left on device writing the catalogue ({exc}): free "
+                         "some space and run the command again", EXIT_FAILED)
+        return _fail(f"catalogue error: {exc}", EXIT_FAILED)
+    text = f"{type(exc).__name__}: {exc}".replace("\n", " ")
+    return _fail(f"internal error: {text[:300]} (DITHERLAB_DEBUG=1 shows the traceback)",
+                 EXIT_FAILED)
+
+
+class _OneLine:
+    """``ditherlab: <message>`` for information, ``ditherlab: warning: <message>`` above."""
+
+    def format(self, record) -> str:
+        kind = "warning: " if record.levelno >= 30 else ""
+        return f"ditherlab: {kind}{record.getMessage()}".replace("\n", " ")
+
+
+@contextmanager
+def _one_line_warnings(verbosity: int = 0):
+    """Warnings (a journal block set aside) and log records of the ``ditherlab`` logger
+    as one line each; ``verbosity`` -1 (``-q``) shows warnings only, 0 information too,
+    1 (``-v``) everything (debug: timings)."""
+    import logging
+    import warnings
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = str(message).replace("\n", " ")
+        print(f"ditherlab: warning: {text}", file=file or sys.stderr)
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(_OneLine())
+    logger = logging.getLogger("ditherlab")
+    logger.setLevel({-1: logging.WARNING, 0: logging.INFO, 1: logging.DEBUG}[verbosity])
+    saved = warnings.showwarning
+    warnings.showwarning = show
+    logger.addHandler(handler)
+    try:
+        yield
+    finally:
+        warnings.showwarning = saved
+        logger.removeHandler(handler)
+
+

@@ -1,0 +1,194 @@
+"""``ditherlab status``, ``query`` and ``map``: commands that only read a store.
+
+They never write: the catalogue is read as a snapshot (``sweeps.lookup.catalogue``), so a
+store path that does not exist stays absent and a read-only store works.
+"""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+from ..errors import RefusedError, UserError
+from ..lookup import STALE, catalogue, is_stale, resolve_sweep, stale_note, store_root
+
+
+def parse_sel(items: list[str] | None) -> dict[str, float]:
+    sel = {}
+    for item in items or ():
+        axis, eq, value = item.partition("=")
+        if not eq:
+            raise RefusedError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
+        try:
+            sel[axis.strip()] = float(value)
+        except ValueError:
+            raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
+    return sel
+
+
+def _warn_stale(root: Path, sweep_id: str, ds) -> None:
+    """One stderr line when the sweep being served is stale (query, map)."""
+    note = stale_note(catalogue(root).get(sweep_id), ds, root)
+    if note:
+        print(f"ditherlab: warning: {note}", file=sys.stderr)
+
+
+def cmd_status(args) -> int:
+    import store
+
+    from ..service import queue_hint
+
+    root = store_root(args.store)
+    cat = catalogue(root)
+    if args.sweep:
+        sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
+        row = cat.get(sweep_id)
+        ds = store.open_cube(cube) if cube.exists() else None
+        live, note = cat.live_state(row), stale_note(row, ds, root)
+        row["state"] = f"{live} ({STALE})" if note else live
+        for key, value in _shown(row, live).items():
+            print(f"{key:>14}: {value}")
+        if note:
+            print(f"{'':>16}{note}")
+        elif live == store.catalogue.STALLED:
+            print(f"{'':>16}the submitting process ({row['owner']}) is gone; submit the spec "
+                  "again to resume (finished blocks are kept)")
+        elif live == "queued":
+            print(f"{'':>16}{queue_hint(cat, [row])}")
+        if ds is not None:
+            _print_error_estimate(ds)
+            _warn_accuracy(ds)
+        return 0
+    rows = cat.list()
+    if not rows:
+        print(f"no sweeps in {root}")
+        return 0
+    lives = [cat.live_state(r) for r in rows]
+    states = [live + (f" ({STALE})" if is_stale(r) else "") for r, live in zip(rows, lives)]
+    w = max(10, *(len(s) + 1 for s in states))
+    print(f"{'sweep':<13}{'name':<24}{'state':<{w}}{'points':>8}{'done':>8}{'failed':>8}"
+          f"{'blocks':>10}  note")
+    for r, state, live in zip(rows, states, lives):
+        blocks = f"{r['done_blocks']}/{r['n_blocks']}" if r["n_blocks"] else "-"
+        print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{state:<{w}}{r['n_points']:>8}"
+              f"{r['done_points']:>8}{r['failed_points']:>8}{blocks:>10}  {_note(r, live)}")
+    hint = queue_hint(cat, rows)
+    if hint:
+        print(hint)
+    return 0
+
+
+def _note(row: dict, live: str, width: int = 90) -> str:
+    """The last column of ``status``: progress and ETA, the error, or when it changed."""
+    from ..service import progress_text
+
+    if live == "running":
+        text = progress_text(row) + (", cancel requested" if row["cancel_requested"] else "")
+    elif live == "stalled":
+        text = f"{row['owner']} is gone; submit the spec again to resume"
+    elif live == "queued":
+        text = row["message"] or f"queued {row['queued_at'][:19]}"
+    elif live == "done":
+        text = f"finished {row['updated'][:19]}"
+    else:
+        text = row["message"] or f"{live} {row['updated'][:19]}"
+    return text if len(text) <= width else text[:width - 3] + "..."
+
+
+def _shown(row: dict, live: str) -> dict:
+    """A catalogue row for ``status SWEEP``: times readable, progress and ETA added."""
+    import time
+
+    from ..service import format_seconds, progress_text
+
+    shown = {k: v for k, v in row.items() if k != "spec_json"}
+    beat = float(row.get("heartbeat") or 0.0)
+    shown["heartbeat"] = f"{time.time() - beat:.1f} s ago" if beat else "-"
+    started = float(row.get("run_started") or 0.0)
+    shown["run_started"] = (time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started))
+                            if started else "-")
+    if live == "running":
+        shown["progress"] = progress_text(row)
+    elif live == "failed":
+        shown["error"] = row["message"]
+    if started and live != "running" and row["state"] != "queued":
+        shown["run_took"] = format_seconds(
+            _seconds_between(started, row["updated"]))
+    return shown
+
+
+def _seconds_between(epoch: float, iso: str) -> float | None:
+    from datetime import datetime
+
+    try:
+        return datetime.fromisoformat(iso).timestamp() - epoch
+    except ValueError:
+        return None
+
+
+def _print_error_estimate(ds) -> None:
+    raw = ds.attrs.get("error_estimate")
+    if not raw:
+        return
+    est = json.loads(raw) if isinstance(raw, str) else raw
+    if "change" not in est:   # written before the gate existed
+        print(f"{'error est.':>14}: (an old estimate without promises; submit again)")
+        return
+    print(f"{'error est.':>14}: change against {est['compared_with']} on "
+          f"{est['sample_points']} sample points (fractions absolute, others relative)")
+    for name, change in est["change"].items():
+        flag = "ok" if change <= est["promise"][name] else "OVER PROMISE"
+        print(f"{'':>16}{name:<22} {change:9.2e}  promise {est['promise'][name]:7.0e}  {flag}")
+
+
+def _warn_accuracy(ds) -> None:
+    """One stderr line per accuracy warning recorded in the cube (sweeps.estimate)."""
+    from ..estimate import warnings_of
+
+    for w in warnings_of(ds):
+        print(f"ditherlab: warning: {w}", file=sys.stderr)
+
+
+def cmd_query(args) -> int:
+    import store
+
+    root = store_root(args.store)
+    sweep_id, cube = resolve_sweep(root, args.sweep)
+    ds = store.open_cube(cube)
+    _warn_stale(root, sweep_id, ds)
+    _warn_accuracy(ds)
+    try:
+        df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
+    except ValueError as exc:
+        raise UserError(str(exc)) from None
+    if args.format == "csv":
+        sys.stdout.write(df.to_csv(index=False))
+    elif args.format == "json":
+        print(json.dumps(json.loads(df.to_json(orient="records")), indent=1))
+    else:
+        print(df.to_string(index=False))
+    return 0
+
+
+def cmd_map(args) -> int:
+    import store
+
+    try:
+        store.figure_format(args.output)   # before any work: a name or folder refused
+    except ValueError as exc:
+        raise RefusedError(str(exc)) from None
+    root = store_root(args.store)
+    sweep_id, cube = resolve_sweep(root, args.sweep)
+    ds = store.open_cube(cube)
+    _warn_stale(root, sweep_id, ds)
+    _warn_accuracy(ds)
+    draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
+            "friction": store.friction_curves}[args.kind]
+    try:
+        draw(ds, args.output, sel=parse_sel(args.sel))
+    except ValueError as exc:
+        raise RefusedError(str(exc)) from None
+    print(f"wrote {args.output}")
+    return 0
+
+

@@ -1,0 +1,153 @@
+"""``ditherlab submit``, ``serve``, ``cancel`` and ``plan``: the commands that run or
+queue work (and ``plan``, which only estimates it and writes nothing unless ``--record``)."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..errors import EXIT_FAILED, Interrupted, UserError
+from ..lookup import store_root
+
+
+def _load(args):
+    """The spec of a ``submit``/``plan`` command (pydantic is imported here, not at start)."""
+    from ..spec import load_spec
+
+    return load_spec(args.spec, max_points=args.max_points)
+
+
+def cmd_submit(args) -> int:
+    import store
+
+    from ..plan import make_plan
+    from ..run import submit
+
+    spec = _load(args)
+    plan = make_plan(spec)
+    root = store_root(args.store)
+    print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
+          f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
+    if args.detach:
+        return _submit_detached(plan, root)
+    try:
+        res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
+                     progress=not args.quiet, dashboard=args.dashboard)
+    except KeyboardInterrupt:
+        raise Interrupted(f"interrupted; {_kept(plan, root)}; "
+                          "submit the spec again to resume") from None
+    except store.layout.NoSpaceError as exc:
+        raise UserError(f"{exc}; {_kept(plan, root)}") from None
+    if res.attached_to:
+        verb = f"attached to the run in {res.attached_to}"
+    else:
+        verb = "already complete" if res.blocks_run == 0 else f"ran {res.blocks_run} blocks"
+    print(f"{res.sweep_id}: {res.state}, {verb}; {res.n_ok}/{res.n_points} ok, "
+          f"{res.n_failed} failed; {res.wall_s:.1f} s\ncube: {res.cube_path}")
+    if res.message:
+        print(f"{res.sweep_id}: {res.message}", file=sys.stderr)
+    return 0 if res.state == "done" else EXIT_FAILED
+
+
+def _kept(plan, root: Path) -> str:
+    """What a stopped submit kept: ``the journal keeps the N finished blocks (of M)``."""
+    import store
+
+    try:
+        n = len(store.Journal(store.SweepDir(root, plan.sweep_id).journal).files())
+    except OSError:
+        return "the journal keeps its finished blocks"
+    return f"the journal keeps the {n} finished blocks (of {len(plan.blocks)})"
+
+
+def _submit_detached(plan, root: Path) -> int:
+    """``submit --detach``: queue the sweep for ``ditherlab serve`` and return at once."""
+    import store
+
+    from ..service import enqueue
+
+    row = enqueue(plan, root)
+    cat = store.Catalogue(root)
+    state = cat.live_state(row)
+    if state == "queued":
+        print(f"{row['sweep_id']}: queued")
+        if not cat.servers():
+            print(f"ditherlab: no `ditherlab serve` is running on store {root}; start one to "
+                  "run the queue", file=sys.stderr)
+    elif state == "running":
+        print(f"{row['sweep_id']}: running in {row['owner']} (`ditherlab status "
+              f"{row['sweep_id']}` shows its progress)")
+    else:
+        print(f"{row['sweep_id']}: {state}, already complete")
+    return 0
+
+
+def cmd_serve(args) -> int:
+    from ..service import serve
+
+    return serve(store_root(args.store), scheduler=args.scheduler, workers=args.workers,
+                 progress=False, dashboard=args.dashboard)
+
+
+def cmd_cancel(args) -> int:
+    import store
+
+    from ..service import cancel
+
+    try:
+        row = cancel(store_root(args.store), args.sweep, wait=args.wait)
+    except LookupError as exc:
+        raise UserError(str(exc)) from None
+    state, sid = store.Catalogue.live_state(row), row["sweep_id"]
+    if state == "cancelled":
+        print(f"{sid}: cancelled; {row['message']}")
+    elif state == "running" and row["cancel_requested"]:
+        print(f"{sid}: cancel requested; {row['owner']} stops after its blocks in flight "
+              f"(`ditherlab status {sid}` shows when)")
+    else:
+        print(f"{sid}: {state}; nothing to cancel")
+    return 0
+
+
+def cmd_plan(args) -> int:
+    from ..calibrate import estimates, format_seconds
+    from ..plan import make_plan
+
+    from .. import history
+
+    spec = _load(args)
+    plan = make_plan(spec)
+    shape = " x ".join(f"{a}={len(v)}" for a, v in plan.coords.items())
+    print(f"sweep      {plan.sweep_id}  '{spec.name}'")
+    print(f"points     {plan.n_points}  ({shape})  in {len(plan.blocks)} interleaved blocks")
+    print(f"path       {plan.path}" + ("" if plan.path == "simulate" else
+                                       "  (no time integration)"))
+    print(f"scene      system={spec.system} friction={spec.friction} dither={plan.scene.dither}")
+    if plan.path == "simulate":
+        on = [k for k, v in plan.effects().items() if v]
+        off = [k for k, v in plan.effects().items() if not v]
+        print(f"effects    compiled in: {', '.join(on) or '-'}; left out: {', '.join(off) or '-'}")
+        s = plan.numerics.settings
+        stops = ("; steps land on every square-wave switch"
+                 if plan.scene.dither == "square-velocity" else "")
+        print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
+              f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
+    print(f"outputs    {', '.join(plan.outputs)}")
+    print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
+          f"phase; cluster start and first compilation come on top)")
+    found = estimates(spec, workers=args.workers)
+    for est in found:
+        print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
+              f"per point  ->  {format_seconds(est.wall_s)} wall")
+    root = store_root(args.store)
+    previous = history.last_comparison(root)
+    if previous:
+        print(previous)
+    if args.record:   # plan writes nothing unless asked
+        try:
+            history.record_estimate(root, plan.sweep_id, {e.level: e.wall_s for e in found})
+        except OSError as err:   # a read-only store or a full disk: shown, not remembered
+            print(f"ditherlab: warning: estimates not recorded ({err.strerror or err})",
+                  file=sys.stderr)
+    return 0
+
+

@@ -1,0 +1,153 @@
+"""The error estimate of every simulated cube, and the gate that makes it loud.
+
+After a sweep, a sample of its points is integrated again one accuracy level finer
+(draft -> standard -> reference -> reference with tolerances / 100; explicit numerics ->
+the same method with tolerances / 100 or 4x the steps) and the observed change per output
+is compared with what the sweep's level promises for that output
+(:func:`sweeps.accuracy.promise`: absolute for time fractions, relative otherwise; explicit
+numerics are held to the ``standard`` promise). The result is stored in the cube's
+``error_estimate`` attribute::
+
+    {"compared_with": "reference", "sample_points": 12, "level": "standard",
+     "change": {"F_mean": 3e-6, ...}, "promise": {"F_mean": 1e-4, ...},
+     "warnings": ["slip_fraction: changed by 2.1e-02 at a finer level ..."]}
+
+and every warning also in the ``accuracy_warnings`` attribute (one string, ``; ``-joined),
+which ``ditherlab status``, ``query`` and ``map`` print.
+
+The sample (:func:`sample_index`) is stratified: the corners of the swept (W, omega)
+plane, the most expensive point (largest omega * W), and a Latin hypercube over the grid's
+axes (seeded by the sweep id, so a rerun samples the same points) -- :data:`SAMPLE_SIZE`
+points in all (every point of a smaller grid). The change is *observed*, not a bound:
+where the level is converged it is close to the true error; where it is not, it says so.
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+
+from engine import params as P
+from engine import status as S
+
+from .accuracy import FRACTION_OUTPUTS, Numerics, numerics, promise
+from .plan import Plan
+
+FINER = {"draft": "standard", "standard": "reference", "reference": None, "explicit": None}
+SAMPLE_SIZE = 12
+# a relative change is measured against max(|value|, REL_FLOOR * the sample's largest |value|)
+# (a quenched v_slow_p2p of 1e-7 has no meaningful relative error)
+REL_FLOOR = 1e-3
+
+
+def finer_numerics(plan: Plan) -> Numerics:
+    """The next level up, or the same integrator at tolerances / 100 at the top."""
+    level = FINER.get(plan.numerics.label)
+    if level is not None:
+        return numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
+    s = plan.numerics.settings
+    finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100,
+                    steps_per_period=s.steps_per_period * 4, h=s.h / 4)
+    return Numerics(plan.numerics.integrator, finer, f"{plan.numerics.label}/100")
+
+
+def sample_index(shape: tuple[int, ...], coords: list[np.ndarray], seed: str,
+                 size: int = SAMPLE_SIZE) -> np.ndarray:
+    """Sorted flat indices (C order over ``shape``) of the stratified error sample."""
+    n = int(np.prod(shape))
+    if n <= size:
+        return np.arange(n)
+    picks: set[int] = set()
+    # corners of the (W, omega) plane at the middle of the other axes
+    mid = [s // 2 for s in shape]
+    for i in (0, shape[0] - 1):
+        for j in (0, shape[1] - 1):
+            picks.add(int(np.ravel_multi_index((i, j, *mid[2:]), shape)))
+    # the costliest point: largest omega * W (most dither periods at the largest amplitude)
+    W, omega = coords[0], coords[1]
+    cost = np.add.outer(np.abs(W) + 1e-12, 0 * omega) * np.abs(omega)[None, :]
+    i, j = np.unravel_index(int(np.argmax(cost)), cost.shape)
+    picks.add(int(np.ravel_multi_index((i, j, *mid[2:]), shape)))
+    # a Latin hypercube over every axis for the rest
+    rng = np.random.default_rng(int(seed[:12], 16) if seed else 0)
+    k = max(size - len(picks), 1)
+    cols = [np.floor((rng.permutation(k) + rng.random(k)) / k * s).astype(int) for s in shape]
+    for row in zip(*cols):
+        if len(picks) >= size:
+            break
+        picks.add(int(np.ravel_multi_index(row, shape)))
+    return np.array(sorted(picks), dtype=np.int64)
+
+
+def sample(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
+    """(flat indices, points ``(k, 4)``) of the error sample of ``plan``."""
+    from . import grid
+
+    coords = [np.asarray(v) for v in plan.coords.values()]
+    index = sample_index(tuple(len(v) for v in coords), coords, plan.sweep_id)
+    return index, grid.points(plan.spec)[index]
+
+
+def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dict:
+    """The observed change between the cube's values and the finer re-run, per output,
+    against the promise of the sweep's level; warnings where a change exceeds it."""
+    level = plan.numerics.label if plan.numerics.label in FINER else "standard"
+    level = "standard" if level == "explicit" else level
+    status = cube["status"].values.reshape(-1)[index]
+    ok = (status == S.OK) & (np.asarray(finer["status"]) == S.OK)
+    change, promised, warnings = {}, {}, []
+    for name in plan.outputs:
+        values = cube[name].values
+        coarse = values.reshape((-1,) + values.shape[4:])[index][ok]
+        fine = np.asarray(finer[name])[ok]
+        if coarse.size == 0:
+            continue
+        diff = np.abs(coarse - fine)
+        if name in FRACTION_OUTPUTS:
+            err = diff
+        else:
+            floor = REL_FLOOR * float(np.nanmax(np.abs(fine))) if np.isfinite(fine).any() else 0
+            if name == "max_stick":   # a run matters against the long-stick threshold
+                floor = max(floor, float(plan.params[P.LONG_STICK]))
+            err = diff / np.maximum(np.maximum(np.abs(fine), floor), 1e-300)
+        worst = float(np.nanmax(err)) if np.isfinite(err).any() else float("inf")
+        if np.isnan(coarse).any() != np.isnan(fine).any():
+            worst = float("inf")
+        change[name], promised[name] = worst, promise(level, name, plan.spec.friction)
+        if not worst <= promised[name]:
+            warnings.append(_warning(name, worst, promised[name], plan.numerics.label, label))
+    dropped = int((~ok).sum())
+    if dropped:
+        warnings.append(f"{dropped} of {ok.size} sample points failed at the finer level "
+                        f"({label}): their error is unknown")
+    return {"compared_with": label, "level": plan.numerics.label,
+            "sample_points": int(ok.sum()), "sample_index": [int(i) for i in index],
+            "change": change, "promise": promised, "warnings": warnings}
+
+
+def _warning(name: str, change: float, promised: float, level: str, finer: str) -> str:
+    kind = "" if name in FRACTION_OUTPUTS else " (relative)"
+    advice = ("submit at a finer accuracy (e.g. accuracy = \"reference\")"
+              if level in ("draft", "standard", "explicit") else
+              "this output is not converged even at the reference level; see docs/ACCURACY.md")
+    return (f"{name}: changed by {change:.1e}{kind} at the finer level {finer}, more than "
+            f"the {level} level promises ({promised:.0e}); {advice}")
+
+
+def warnings_of(ds) -> list[str]:
+    """The accuracy warnings recorded in a cube (empty when there are none)."""
+    raw = ds.attrs.get("error_estimate")
+    if not raw:
+        return []
+    try:
+        est = json.loads(raw) if isinstance(raw, str) else raw
+    except ValueError:
+        return []
+    return [str(w) for w in est.get("warnings", [])]
+
+
+def attach(cube, estimate: dict) -> None:
+    """Record ``estimate`` (from :func:`compare`) in the cube's attributes."""
+    cube.attrs["error_estimate"] = json.dumps(estimate)
+    cube.attrs["accuracy_warnings"] = "; ".join(estimate["warnings"])

@@ -1,0 +1,105 @@
+"""Finding a sweep in a store by what a user typed, and saying when it is stale.
+
+Used alike by the command line and the Python API (``sweeps.api``); reads only: the
+catalogue is opened read-only (a snapshot in memory), so a lookup never creates a store,
+adopts a cube or migrates a catalogue on disk.
+
+A key is a sweep id, a unique id prefix or a sweep name. A name given to several sweeps
+(a spec edited and submitted again under the same name) means the one made by the
+installed engine when exactly one is (stale sweeps are never served as current, README
+"Which engine made this cube"); otherwise the lookup is refused with the candidates listed.
+"""
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+from .errors import AmbiguousSweepError, SpecError, UserError
+
+STALE = "stale: engine changed"
+
+
+def store_root(arg: str | os.PathLike | None = None) -> Path:
+    """The store folder: ``arg``, else ``$DITHERLAB_STORE``, else ``./ditherlab-store``."""
+    return Path(arg or os.environ.get("DITHERLAB_STORE") or "ditherlab-store")
+
+
+def catalogue(root: Path):
+    """The store's catalogue for reading (never writes, also on a missing store path)."""
+    import store
+
+    return store.Catalogue(root, readonly=True)
+
+
+def resolve_sweep(root: Path, key: str, need_cube: bool = True) -> tuple[str, Path]:
+    """A sweep id, id prefix or name -> ``(sweep id, cube path)``.
+
+    With ``need_cube=False`` the cube may not exist yet (a queued sweep). Raises
+    :class:`UserError` when nothing matches or the cube is missing, and
+    :class:`AmbiguousSweepError` (exit 2) when the key fits several current sweeps.
+    """
+    import store
+
+    rows = catalogue(root).matches(key)
+    if not rows:
+        raise UserError(f"no sweep {key!r} in store {root} (see `ditherlab status`)")
+    if len(rows) > 1:
+        current = [r for r in rows if not is_stale(r)]
+        if len(current) != 1:
+            raise AmbiguousSweepError(_ambiguity(key, current or rows))
+        rows = current
+    sweep_id = rows[0]["sweep_id"]
+    cube = store.SweepDir(root, sweep_id).cube
+    if need_cube and not cube.exists():
+        raise UserError(f"sweep {sweep_id} has no cube yet at {cube}; submit it again")
+    return sweep_id, cube
+
+
+def _ambiguity(key: str, rows: list[dict]) -> str:
+    shown = "; ".join(f"{r['sweep_id']} ({r['state']}, {r['n_points']} points, created "
+                      f"{str(r['created'])[:19]})" for r in rows[:6])
+    more = f"; and {len(rows) - 6} more" if len(rows) > 6 else ""
+    return f"{key!r} names {len(rows)} sweeps: {shown}{more}; pass the sweep id"
+
+
+def engine_of(row: dict, ds=None) -> str:
+    """Fingerprint of the engine that made a sweep: the cube's ``engine_fingerprint``
+    attribute, else the catalogue's; ``''`` when neither recorded one."""
+    made = ds.attrs.get("engine_fingerprint", "") if ds is not None else ""
+    return str(made or row.get("engine_fingerprint") or "")
+
+
+def is_stale(row: dict, ds=None) -> bool:
+    """True when a sweep was made by an engine other than the installed one.
+
+    Judged by the recorded fingerprint; without one (a sweep from before fingerprints,
+    or a row registered before its run began), by whether its spec still hashes to its id.
+    """
+    from .version import results_fingerprint
+
+    made = engine_of(row, ds)
+    if made:
+        return made != results_fingerprint()
+    from .spec import load_spec
+
+    try:
+        spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
+    except (SpecError, ValueError, TypeError):
+        return True
+    return spec.sweep_id != row["sweep_id"]
+
+
+def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
+    """One line saying a sweep is stale and how to recompute it, or None if current."""
+    import store
+
+    from .version import results_fingerprint
+
+    if not is_stale(row, ds):
+        return None
+    made = engine_of(row, ds) or "(not recorded)"
+    saved = store.SweepDir(root, row["sweep_id"]).spec if root is not None else None
+    spec = f" (e.g. {saved})" if saved is not None and saved.exists() else ""
+    return (f"sweep {row['sweep_id']} was made by engine {made}, the installed engine is "
+            f"{results_fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
