@@ -20,7 +20,9 @@ readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
 from __future__ import annotations
 
 import importlib.metadata
+import sys
 from collections.abc import Mapping
+from contextlib import nullcontext
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -321,8 +323,19 @@ def publish(ds: xr.Dataset, path) -> Path:
         var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
     if path.parent.exists():
         remove_stale_temps(path.parent)
-    image = out.to_netcdf(engine="h5netcdf", encoding=_encoding(out))
+    with _local_writes():
+        image = out.to_netcdf(engine="h5netcdf", encoding=_encoding(out))
     return atomic_write(path, image)
+
+
+def _local_writes():
+    """xarray takes a dask.distributed lock for every netCDF write while a distributed
+    ``Client`` is dask's default scheduler (a user's ``Client(cluster)`` is), and for an
+    in-memory image that lock fails ("Semaphore or Lock ... not known"). A cube is
+    numpy-backed, so dask's synchronous scheduler is right. ``store`` never imports dask:
+    this only configures it when something else already has."""
+    dask = sys.modules.get("dask")
+    return dask.config.set(scheduler="synchronous") if dask is not None else nullcontext()
 
 
 def cube_bytes(ds: xr.Dataset) -> int:

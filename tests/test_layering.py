@@ -31,3 +31,76 @@ def test_package_imports_with_others_blocked(package):
     code = BLOCKER.format(blocked=RULES[package], package=package)
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+# --- no import circle inside a package ----------------------------------------------------
+# Counted: imports at module level (those run when a module is imported). An import inside
+# a function is the sanctioned way to defer a heavy or optional dependency, and runs only
+# when called; it is not an edge here.
+
+import ast  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _module_name(path: Path) -> str:
+    parts = path.relative_to(ROOT).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _imports(path: Path, package: str) -> set[str]:
+    """Modules of ``package`` that ``path`` imports at module level."""
+    me = _module_name(path)
+    base = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    out = set()
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Import):
+            out |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            mod = node.module or ""
+            if node.level:
+                anchor = base.split(".")[:len(base.split(".")) - node.level + 1]
+                mod = ".".join(anchor + ([mod] if mod else []))
+            out |= {mod} | {f"{mod}.{a.name}" for a in node.names}
+    return {m for m in out if m == package or m.startswith(package + ".")}
+
+
+def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    state, stack = {}, []
+
+    def visit(node):
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                return stack[stack.index(nxt):] + [nxt]
+            if nxt not in state and (found := visit(nxt)):
+                return found
+        state[node] = 2
+        stack.pop()
+        return None
+
+    for node in sorted(graph):
+        if node not in state and (found := visit(node)):
+            return found
+    return None
+
+
+@pytest.mark.parametrize("package", ["engine", "store", "sweeps"])
+def test_no_import_circle_inside_a_package(package):
+    files = sorted((ROOT / package).rglob("*.py"))
+    modules = {_module_name(f) for f in files}
+    graph = {}
+    for f in files:
+        me = _module_name(f)
+        # importing a package's __init__ from inside it is not a circle of modules
+        graph[me] = {m for m in _imports(f, package) if m in modules and m != me
+                     and not (me.startswith(m + ".") and (ROOT / Path(*m.split("."))
+                                                          / "__init__.py").exists())}
+    assert _cycle(graph) is None, " -> ".join(_cycle(graph))
+
+
+def test_the_circle_finder_finds_circles():
+    assert _cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}}) == ["a", "b", "c", "a"]
+    assert _cycle({"a": {"b"}, "b": set()}) is None

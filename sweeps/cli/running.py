@@ -25,8 +25,9 @@ def cmd_submit(args) -> int:
     spec = _load(args)
     plan = make_plan(spec)
     root = store_root(args.store)
-    print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
-          f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
+    if not args.quiet:
+        print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
+              f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
     if args.detach:
         return _submit_detached(plan, root)
     try:

@@ -1,0 +1,78 @@
+"""A sweep on a cluster started the way a batch system starts one (README "On an HPC
+cluster"): a `dask scheduler` process writing a scheduler file, `dask worker` processes
+reading it (what a SLURM job script, or dask-jobqueue's SLURMCluster, runs), a kernel cache
+shared through $DITHERLAB_CACHE_DIR, and `ditherlab submit --scheduler ADDRESS`."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+import sweeps
+
+SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity", "outputs": ["v_mean"],
+        "accuracy": "draft", "time": {"t_end": 4.0, "t_transient": 1.0},
+        "grid": {"W": [0.0, 0.3], "omega": [200.0], "v_ref": [0.2, 0.4]}}
+
+
+def _wait_for(path, seconds=120.0):
+    t0 = time.monotonic()
+    while not path.exists() or not path.read_text().strip():
+        if time.monotonic() - t0 > seconds:
+            raise TimeoutError(f"{path} not written in {seconds} s")
+        time.sleep(0.2)
+    return json.loads(path.read_text())
+
+
+def _wait_for_workers(address: str, n: int, seconds=120.0) -> None:
+    from distributed import Client
+
+    with Client(address, timeout="30s") as client:
+        client.wait_for_workers(n, timeout=seconds)
+
+
+@pytest.fixture
+def batch_cluster(tmp_path):
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "shared-cache")}
+    sched_file = tmp_path / "scheduler.json"
+    procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
+                               "--port", "0", "--dashboard-address", ":0",
+                               "--scheduler-file", str(sched_file)], env=env,
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        address = _wait_for(sched_file)["address"]
+        procs += [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker",
+                                    "--scheduler-file", str(sched_file), "--nthreads", "1",
+                                    "--nworkers", "1", "--no-dashboard"], env=env,
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                  for _ in range(2)]
+        _wait_for_workers(address, 2)
+        yield address, env
+    finally:
+        for p in procs[::-1]:
+            p.terminate()
+        for p in procs:
+            p.wait(timeout=60)
+
+
+def test_submit_to_batch_started_workers(batch_cluster, tmp_path):
+    address, env = batch_cluster
+    spec = tmp_path / "hpc.json"
+    spec.write_text(json.dumps(SPEC))
+    out = subprocess.run([sys.executable, "-m", "sweeps.cli", "submit", str(spec), "--store",
+                          str(tmp_path / "store"), "--scheduler", address, "-q"],
+                         capture_output=True, text=True, timeout=600, env=env)
+    assert out.returncode == 0, out.stderr
+    assert "done" in out.stdout and "4/4 ok" in out.stdout
+    assert list((tmp_path / "shared-cache").glob("numba-*")), "the kernel cache lives in the shared folder"
+    # the numbers equal those of the service's own local cluster
+    key = sweeps.load_spec(SPEC).sweep_id
+    remote = sweeps.open_sweep(key, store=tmp_path / "store")
+    sweeps.run_sweep(SPEC, store=tmp_path / "local", workers=1, progress=False)
+    local = sweeps.open_sweep(key, store=tmp_path / "local")
+    np.testing.assert_array_equal(remote["v_mean"].values, local["v_mean"].values)
