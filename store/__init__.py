@@ -70,12 +70,14 @@ import lazy_loader as _lazy
 # xarray or matplotlib (a command's start-up time is its imports).
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["attrs", "catalogue", "cube", "journal", "layout", "maps", "query", "status"],
+    submodules=["attrs", "catalogue", "cube", "header", "journal", "layout", "maps", "query",
+                "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
         "cube": ["AXES", "empty_cube", "fill", "grid_points", "open_cube", "output_names",
                  "pending_index", "publish", "status_counts"],
+        "header": ["read_header"],
         "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
         "layout": ["SweepDir", "atomic_write", "default_store"],
         "maps": ["FORMATS", "figure_format", "friction_curves", "stability_map",

@@ -79,3 +79,15 @@ def decode(value: Any) -> Any:
 
 
 decode_attr = decode   # the name store re-exports (``store.decode_attr``)
+
+
+def accuracy_warnings(attrs: Mapping) -> list[str]:
+    """The accuracy warnings a cube's ``error_estimate`` attribute records (none: [])."""
+    raw = attrs.get("error_estimate")
+    if not raw:
+        return []
+    try:
+        est = json.loads(raw) if isinstance(raw, str) else raw
+    except ValueError:
+        return []
+    return [str(w) for w in est.get("warnings", [])]

@@ -137,14 +137,9 @@ def _warning(name: str, change: float, promised: float, level: str, finer: str) 
 
 def warnings_of(ds) -> list[str]:
     """The accuracy warnings recorded in a cube (empty when there are none)."""
-    raw = ds.attrs.get("error_estimate")
-    if not raw:
-        return []
-    try:
-        est = json.loads(raw) if isinstance(raw, str) else raw
-    except ValueError:
-        return []
-    return [str(w) for w in est.get("warnings", [])]
+    from store.attrs import accuracy_warnings
+
+    return accuracy_warnings(ds.attrs)
 
 
 def attach(cube, estimate: dict) -> None:

@@ -43,7 +43,7 @@ def cmd_status(args) -> int:
     if args.sweep:
         sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
         row = cat.get(sweep_id)
-        ds = store.open_cube(cube) if cube.exists() else None
+        ds = _header(cube) if cube.exists() else None
         live, note = cat.live_state(row), stale_note(row, ds, root)
         row["state"] = f"{live} ({STALE})" if note else live
         for key, value in _shown(row, live).items():
@@ -76,6 +76,17 @@ def cmd_status(args) -> int:
     if hint:
         print(hint)
     return 0
+
+
+def _header(cube: Path):
+    """The cube's attributes (all ``status`` reads of it), or an unreadable cube's one line."""
+    import store
+
+    try:
+        return store.read_header(cube)
+    except OSError:
+        store.open_cube(cube)   # raises the one-line CubeError that says how to repair it
+        raise
 
 
 def _note(row: dict, live: str, width: int = 90) -> str:
@@ -143,9 +154,9 @@ def _print_error_estimate(ds) -> None:
 
 def _warn_accuracy(ds) -> None:
     """One stderr line per accuracy warning recorded in the cube (sweeps.estimate)."""
-    from ..estimate import warnings_of
+    from store.attrs import accuracy_warnings
 
-    for w in warnings_of(ds):
+    for w in accuracy_warnings(ds.attrs):
         print(f"ditherlab: warning: {w}", file=sys.stderr)
 
 

@@ -134,3 +134,15 @@ def test_run_sweep_takes_a_spec_and_an_existing_client(tmp_path):
     for name in ("v_mean", "status"):
         np.testing.assert_array_equal(sweeps.open_sweep(res.sweep_id, tmp_path / "s")[name],
                                       sweeps.open_sweep(own.sweep_id, tmp_path / "own")[name])
+
+
+def test_status_of_one_sweep_imports_no_numerics(avg_store):
+    """`status SWEEP` reads the cube's attributes with h5py alone (0.4 s, against 1.9 s)."""
+    key = sweeps.load_spec(AVERAGED).sweep_id   # the name may be shared by now (see above)
+    code = (f"import sys; from sweeps.cli import main\n"
+            f"assert main(['status', {key!r}, '--store', {str(avg_store)!r}]) == 0\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "state: done" in out.stdout and out.stdout.strip().splitlines()[-1] == "[]"
