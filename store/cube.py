@@ -46,7 +46,10 @@ BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
     "steps": (np.int64, 0, "accepted integrator steps", "1"),
     "evals": (np.int64, 0, "right-hand-side evaluations", "1"),
 }
-RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index"}
+# refined sweeps (sweeps.refine): per point, computed or inferred from computed neighbours
+PROVENANCE = "provenance"
+PROVENANCE_MEANINGS = ("computed", "inferred", "not_yet_decided")
+RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index", PROVENANCE}
 COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
 
 
@@ -182,8 +185,18 @@ def _bin_coord(dim: str, size: int) -> xr.Variable:
 
 
 def output_names(ds: xr.Dataset) -> list[str]:
-    """The cube's output variables (every data variable except the bookkeeping ones)."""
-    return [str(v) for v in ds.data_vars if v not in BOOKKEEPING]
+    """The cube's output variables (every data variable except the bookkeeping ones and
+    a refined sweep's ``provenance``)."""
+    return [str(v) for v in ds.data_vars if v not in BOOKKEEPING and v != PROVENANCE]
+
+
+def add_provenance(ds: xr.Dataset) -> None:
+    """Give ``ds`` the ``provenance`` flag variable of a refined sweep (int8, CF flags: 0
+    computed, 1 inferred, 2 not yet decided), every point not yet decided."""
+    ds[PROVENANCE] = xr.Variable(AXES, np.full(shape_of(ds), 2, dtype=np.int8), {
+        "long_name": "computed, or inferred from computed neighbours (adaptive refinement)",
+        "flag_values": np.arange(len(PROVENANCE_MEANINGS), dtype=np.int8),
+        "flag_meanings": " ".join(PROVENANCE_MEANINGS)})
 
 
 def shape_of(ds: xr.Dataset) -> tuple[int, ...]:

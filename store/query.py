@@ -279,6 +279,7 @@ def table(ds: xr.Dataset, var: str | None = None, sel=None) -> pd.DataFrame:
     for name in names:
         _variable(ds, name, "table")
     extra = [d for n in names for d in ds[n].dims[len(AXES):]]
-    sub = select(ds, sel)[names + ["status"]]
+    flags = ["provenance"] if "provenance" in ds else []   # refined sweeps
+    sub = select(ds, sel)[names + ["status"] + flags]
     frame = sub.to_dataframe().reset_index()
-    return frame[list(AXES) + extra + names + ["status"]]
+    return frame[list(AXES) + extra + names + ["status"] + flags]

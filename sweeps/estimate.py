@@ -82,11 +82,11 @@ def sample_index(shape: tuple[int, ...], coords: list[np.ndarray], seed: str,
 
 def sample(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
     """(flat indices, points ``(k, 4)``) of the error sample of ``plan``."""
-    from . import grid
-
     coords = [np.asarray(v) for v in plan.coords.values()]
     index = sample_index(tuple(len(v) for v in coords), coords, plan.sweep_id)
-    return index, grid.points(plan.spec)[index]
+    if plan.sources is not None:   # a refined sweep: the computed points the sample holds
+        index = np.unique(plan.sources[index])
+    return index, plan.points[index]
 
 
 def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dict:

@@ -9,6 +9,7 @@ is 0, the dither when W == 0 everywhere) and without every observable not reques
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -42,6 +43,8 @@ class Plan:
     outputs: tuple[str, ...]
     coords: dict[str, np.ndarray]
     blocks: list[np.ndarray] = field(repr=False)
+    refinement: object = field(default=None, repr=False)   # sweeps.refine (refined sweeps)
+    sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -61,9 +64,14 @@ class Plan:
             eff["elasto-plastic phases"] = True
         return eff
 
+    @functools.cached_property
+    def points(self) -> np.ndarray:
+        """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built once."""
+        return grid.points(self.spec)
+
     def block_points(self, b: int) -> np.ndarray:
         """The ``(k, 4)`` grid points of block ``b`` (columns W, omega, v_ref, vd)."""
-        return grid.points(self.spec)[self.blocks[b]]
+        return self.points[self.blocks[b]]
 
 
 def base_params(spec: Spec) -> np.ndarray:
@@ -104,4 +112,5 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, coords=coords, blocks=interleaved_blocks(n, n_blocks))
+                outputs=outputs, coords=coords,
+                blocks=[] if spec.refine else interleaved_blocks(n, n_blocks))

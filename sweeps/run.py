@@ -236,15 +236,23 @@ def empty_cube(plan: Plan):
         if plan.spec.system == "contact" else None
     names = {"omega": "dither angular frequency: inf, the averaged theory is the limit "
                       "omega -> infinity"} if plan.path == "averaged" else None
-    return store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units,
+    cube = store.empty_cube(plan.coords, variables, cube_attrs(plan), axis_units=units,
                             axis_long_names=names)
+    if plan.spec.refine:
+        store.cube.add_provenance(cube)
+    return cube
 
 
 # --- submit ----------------------------------------------------------------------------
 
 def blocks_to_run(plan: Plan, cube) -> list[int]:
     """Blocks with a point whose status is not OK: never computed, or failed before
-    (DESIGN.md §4: a resubmitted spec computes only the points whose status is not 0)."""
+    (DESIGN.md §4: a resubmitted spec computes only the points whose status is not 0).
+    A refined sweep's blocks are known level by level: sweeps.run_refined.replay."""
+    if plan.spec.refine:
+        from .run_refined import replay
+
+        return replay(plan, cube)
     status = cube["status"].values.ravel()
     return [b for b, index in enumerate(plan.blocks) if np.any(status[index] != S.OK)]
 
@@ -271,7 +279,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     journal = store.Journal(sweep.journal)
     # what earlier runs finished; bad blocks are only skipped until this process holds
     # the sweep (their writer may be replacing them right now)
-    cube = store.rebuild(empty_cube(plan), journal, plan.blocks, repair=False)
+    cube = store.rebuild(empty_cube(plan), journal, _checked_blocks(plan), repair=False)
     attach_saved_estimate(sweep, cube)
     todo = blocks_to_run(plan, cube)
     catalogue = store.Catalogue(store_root)
@@ -291,7 +299,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
-        cube = store.rebuild(empty_cube(plan), journal, plan.blocks)
+        cube = store.rebuild(empty_cube(plan), journal, _checked_blocks(plan))
         attach_saved_estimate(sweep, cube)
         todo = blocks_to_run(plan, cube)
         _republish(plan, sweep, cube)  # a valid cube, equal to the journal, from the start
@@ -299,6 +307,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         sink = BlockSink(plan, cube, journal, sweep, lease)
         run = _run_blocks_local if plan.path != "simulate" and scheduler is None \
             else _run_blocks
+        if plan.spec.refine:
+            from .run_refined import run
         if todo or _needs_estimate(plan, sweep, cube):
             run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
                 timings=timings, client=client, dashboard=dashboard)
@@ -313,6 +323,12 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     return _result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run, t0=t0,
                    timings=timings, lease=lease, stopped=sink.stopped,
                    max_blocks=max_blocks)
+
+
+def _checked_blocks(plan: Plan):
+    """The blocks the journal is checked against: a refined sweep's are not known before
+    its replay (sweeps.run_refined), so only checksums and index ranges are checked."""
+    return None if plan.spec.refine else plan.blocks
 
 
 def _check_space(plan: Plan, sweep, cube, todo: list[int]) -> None:
@@ -421,19 +437,25 @@ def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, work
         timings["compute_s"] = time.perf_counter() - t
         if _needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and _complete(sink.cube)):
-            t = time.perf_counter()
-            try:
-                estimate = _error_estimate(plan, client, sink.cube)
-            except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
-                estimate = {"compared_with": None, "level": plan.numerics.label,
-                            "sample_points": 0, "change": {}, "promise": {},
-                            "warnings": [f"the error estimate could not be computed "
-                                         f"({type(exc).__name__}: {exc}); submit again"]}
-            errest.attach(sink.cube, estimate)
-            if estimate["compared_with"] is not None:
-                _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
-            timings["error_estimate_s"] = time.perf_counter() - t
+            estimate_into(plan, client, sink, timings)
     bar.close()
+
+
+def estimate_into(plan: Plan, client, sink: BlockSink, timings: dict) -> None:
+    """The error estimate (sweeps.estimate) of a finished simulated sweep, into its cube
+    and ``<sweep>/error_estimate.json``; a failure is recorded as a warning, never lost."""
+    t = time.perf_counter()
+    try:
+        estimate = _error_estimate(plan, client, sink.cube)
+    except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
+        estimate = {"compared_with": None, "level": plan.numerics.label,
+                    "sample_points": 0, "change": {}, "promise": {},
+                    "warnings": [f"the error estimate could not be computed "
+                                 f"({type(exc).__name__}: {exc}); submit again"]}
+    errest.attach(sink.cube, estimate)
+    if estimate["compared_with"] is not None:
+        _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
+    timings["error_estimate_s"] = time.perf_counter() - t
 
 
 def _error_estimate(plan: Plan, client, cube) -> dict:

@@ -226,6 +226,20 @@ class ExplicitAccuracy(_Strict):
         return v
 
 
+class Refine(_Strict):
+    """Adaptive refinement of the map's class boundary (sweeps.refine): ``coarse`` is the
+    stride of the first lattice (a power of two; default about 8 steps per map axis)."""
+
+    coarse: Annotated[int, Field(ge=1, le=1 << 20)] | None = None
+
+    @field_validator("coarse")
+    @classmethod
+    def _power_of_two(cls, v):
+        if v is not None and v & (v - 1):
+            raise ValueError(f"must be a power of two (1, 2, 4, 8, ...), got {show(v)}")
+        return v
+
+
 class Spec(_Strict):
     name: Annotated[str, Field(max_length=200)] = "sweep"
     description: Annotated[str, Field(max_length=10_000)] = ""
@@ -240,6 +254,7 @@ class Spec(_Strict):
     time: TimeWindow = TimeWindow()
     grid: Grid = Grid()
     block_size: Annotated[int, Field(ge=1, le=MAX_AXIS_POINTS)] | None = None
+    refine: bool | Refine = False
 
     @field_validator("outputs")
     @classmethod
@@ -255,6 +270,8 @@ class Spec(_Strict):
         at that default, so existing sweeps keep their ids (and resume): ``atol_units``.
         """
         data = self.model_dump(mode="json", exclude=set(COSMETIC))
+        if data.get("refine") is False:
+            del data["refine"]   # the exhaustive grid, as before the field existed
         acc = data.get("accuracy")
         if isinstance(acc, dict) and acc.get("atol_units") == "absolute":
             del acc["atol_units"]
@@ -434,6 +451,8 @@ def _check_choices(spec: Spec) -> list[str]:
     if spec.system == "contact" and spec.dither == "sine-force":
         problems.append("dither: 'sine-force' needs a mass; the contact system (no inertia) "
                         "takes 'sine-velocity', 'square-velocity' or 'none'")
+    if spec.refine is not False:
+        problems += _check_refine(spec)
     if spec.method == "averaged" and spec.grid.omega is not None:
         problems.append("grid.omega: the averaged theory is the limit omega -> infinity and "
                         "has no dither frequency; drop grid.omega (the cube's omega is inf) or "
@@ -451,6 +470,23 @@ def _check_choices(spec: Spec) -> list[str]:
                                                     spec.params.fc is not None
                                                     else " (one of them the default)"))
     return problems
+
+
+def _check_refine(spec: Spec) -> list[str]:
+    """Refinement needs a class to refine on (sweeps.refine.CLASS_OUTPUT)."""
+    from .outputs import resolve_outputs
+    from .refine import CLASS_OUTPUT, PLANES
+
+    if spec.method not in CLASS_OUTPUT:
+        return [f"refine: the {spec.method} path draws no zone map or stability chart; "
+                "drop refine"]
+    need = CLASS_OUTPUT[spec.method]
+    if need not in resolve_outputs(spec.method, spec.outputs):
+        return [f"refine: refining the {spec.method} map needs the output {need!r} (its "
+                f"classes); add it to outputs"]
+    a, b = PLANES[spec.method]
+    return [] if getattr(spec.grid, a) is not None or getattr(spec.grid, b) is not None \
+        else [f"refine: sweep {a} or {b} (the map's plane) to refine"]
 
 
 def _check_grid(spec: Spec) -> list[str]:

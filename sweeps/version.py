@@ -9,7 +9,7 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 # the modules that turn a spec into what the engine runs (levels, tolerances, scene, grid):
 # a change there changes results as surely as an engine edit
-PLANNING = ("accuracy.py", "plan.py", "grid.py", "outputs.py")
+PLANNING = ("accuracy.py", "plan.py", "grid.py", "outputs.py", "refine.py", "run_refined.py")
 
 
 def results_fingerprint() -> str:

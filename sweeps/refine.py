@@ -1,0 +1,189 @@
+"""Adaptive refinement of a map's boundary (issue 11): compute a coarse lattice, then only the
+cells whose corners disagree, level by level down to the spec's grid; infer the rest.
+
+A map's information is on its class boundary (stick-slip zone: ``long_stick_fraction > 0``;
+stability chart: ``stable``). On a 2-D plane of the cube (``PLANES``: (W, omega) for the
+simulate path, (W, v_ref) for the averaged one; every other axis value is a separate plane)
+the refinement
+
+1. computes the lattice of stride ``s`` = the coarse stride (a power of two; the last index of
+   each axis always belongs to the lattice, so edge cells may be narrower);
+2. looks at each cell of the lattice (two consecutive lattice values per axis): a cell whose
+   four corners carry the same class is *settled*; a cell whose corners disagree is split at
+   stride ``s/2``, and the new lattice points inside it (edges included) are computed next;
+3. repeats until the split cells are single grid steps.
+
+Every point never computed lies in a settled cell and is *inferred*: its class is the
+corners' class and its values are those of the nearest corner (ties: the lowest corner).
+The decisions depend only on computed values, so a resumed run replays them exactly and
+ends in the same cube (the journal holds every computed point). A feature smaller than the
+coarse lattice that touches no corner can be missed: ``scripts/bench_maps.py`` measures the
+share of cells that agree with the full grid.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+AXES = ("W", "omega", "v_ref", "v_d")
+PLANES = {"simulate": ("W", "omega"), "averaged": ("W", "v_ref")}
+CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
+# a continuous quantity whose sign is the class: a cell whose corners agree is still split
+# when the quantity varies across it by more than its least distance from 0 (a sign change,
+# e.g. a small unstable island, may hide inside)
+MARGIN_OUTPUT = {"averaged": "max_real_eig"}
+COMPUTED, INFERRED, NOT_NEEDED = 0, 1, 2
+FLAG_MEANINGS = ("computed", "inferred")
+
+
+def default_stride(n: int, target: int = 8) -> int:
+    """The coarse stride for an axis of ``n`` points: the power of two that leaves about
+    ``target`` lattice steps (1 for a short axis)."""
+    if n <= target + 1:
+        return 1
+    return 2 ** math.ceil(math.log2((n - 1) / target))
+
+
+def classify(path: str, values: np.ndarray) -> np.ndarray:
+    """The class of each point from its class output (NaN stays NaN: not computed)."""
+    out = np.where(values > 0, 1.0, 0.0) if path == "simulate" else np.round(values)
+    return np.where(np.isnan(values), np.nan, out)
+
+
+def _lattice(lo: int, hi: int, stride: int) -> np.ndarray:
+    """Indices lo, lo+stride, ... and hi itself."""
+    return np.unique(np.append(np.arange(lo, hi + 1, stride), hi))
+
+
+def _uncertain(margin, a0, a1, b0, b1) -> bool:
+    if margin is None:
+        return False
+    m = margin[[a0, a0, a1, a1], [b0, b1, b0, b1]]
+    return bool(np.min(np.abs(m)) < np.ptp(m)) if np.all(np.isfinite(m)) else True
+
+
+@dataclass
+class Plane:
+    """The refinement of one 2-D plane of ``shape`` (na, nb), driven level by level."""
+
+    shape: tuple[int, int]
+    stride: int
+    cells: list[tuple[int, int, int, int]] = field(default_factory=list)  # open cells
+    settled: list[tuple[int, int, int, int, float]] = field(default_factory=list)
+
+    @classmethod
+    def start(cls, shape: tuple[int, int], stride: int) -> tuple[Plane, np.ndarray]:
+        """The plane and its first (coarse) points as an ``(k, 2)`` index array."""
+        ia, ib = (_lattice(0, n - 1, stride) for n in shape)
+        plane = cls(shape, stride, [(a0, a1, b0, b1) for a0, a1 in zip(ia, ia[1:])
+                                    for b0, b1 in zip(ib, ib[1:])])
+        return plane, np.array([(a, b) for a in ia for b in ib], dtype=np.int64)
+
+    def step(self, classes: np.ndarray, margin: np.ndarray | None = None) -> np.ndarray:
+        """Given the classes of every point computed so far (``shape``, NaN elsewhere),
+        and optionally their margin (``MARGIN_OUTPUT``), settle or split the open cells;
+        the ``(k, 2)`` points to compute next (may repeat computed ones: the caller skips
+        those). Empty when the plane is done."""
+        half = max(self.stride // 2, 1)
+        new_cells, points = [], []
+        for a0, a1, b0, b1 in self.cells:
+            corners = classes[[a0, a0, a1, a1], [b0, b1, b0, b1]]
+            if np.all(corners == corners[0]) and not _uncertain(margin, a0, a1, b0, b1):
+                self.settled.append((a0, a1, b0, b1, float(corners[0])))
+                continue
+            if a1 - a0 <= 1 and b1 - b0 <= 1:
+                continue                       # a boundary between neighbours: resolved
+            ia, ib = _lattice(a0, a1, half), _lattice(b0, b1, half)
+            new_cells += [(x0, x1, y0, y1) for x0, x1 in zip(ia, ia[1:])
+                          for y0, y1 in zip(ib, ib[1:])]
+            points += [(a, b) for a in ia for b in ib]
+        self.cells, self.stride = new_cells, half
+        if not points:
+            return np.empty((0, 2), dtype=np.int64)
+        return np.unique(np.array(points, dtype=np.int64), axis=0)
+
+    def sources(self, computed: np.ndarray) -> np.ndarray:
+        """For every point of the plane, the flat plane index of the computed point whose
+        values it takes: itself when computed, the nearest corner of its settled cell when
+        inferred, -1 when in no settled cell (only possible before the plane is done)."""
+        na, nb = self.shape
+        src = np.where(computed.ravel(), np.arange(na * nb), -1).reshape(self.shape)
+        for a0, a1, b0, b1, _ in self.settled:
+            a = np.arange(a0, a1 + 1)[:, None]
+            b = np.arange(b0, b1 + 1)[None, :]
+            ca = np.where(a - a0 <= a1 - a, a0, a1)
+            cb = np.where(b - b0 <= b1 - b, b0, b1)
+            block = src[a0:a1 + 1, b0:b1 + 1]
+            fill = np.broadcast_to(ca * nb + cb, block.shape)
+            block[block < 0] = fill[block < 0]
+        return src
+
+
+class Refinement:
+    """Every plane of a cube of ``shape`` refined together, level by level.
+
+    Level ``k`` asks for the flat cube indices :meth:`next_points` returns (only points not
+    asked for before, sorted: the caller cuts them into blocks in this order, so a replay
+    gives the same blocks); :attr:`asked` marks every point asked for so far.
+    """
+
+    def __init__(self, path: str, shape: tuple[int, ...], coarse: int | None = None):
+        self.path, self.shape = path, tuple(shape)
+        self.axes = tuple(AXES.index(a) for a in PLANES[path])
+        plane_shape = tuple(self.shape[i] for i in self.axes)
+        self.stride = coarse or max(default_stride(n) for n in plane_shape)
+        others = [range(n) if i not in self.axes else [0] for i, n in enumerate(self.shape)]
+        self._origins = np.stack(np.meshgrid(*others, indexing="ij"), -1).reshape(-1, 4)
+        self.planes: list[Plane] = []
+        self.asked = np.zeros(int(np.prod(self.shape)), dtype=bool)
+        self.level = -1
+
+    def _flat(self, origin: np.ndarray, pts: np.ndarray) -> np.ndarray:
+        multi = np.repeat(origin[None, :], len(pts), axis=0)
+        multi[:, self.axes[0]], multi[:, self.axes[1]] = pts[:, 0], pts[:, 1]
+        return np.ravel_multi_index(tuple(multi.T), self.shape)
+
+    def _plane_values(self, values: np.ndarray, origin: np.ndarray) -> np.ndarray:
+        index = [slice(None) if i in self.axes else int(o) for i, o in enumerate(origin)]
+        return values.reshape(self.shape)[tuple(index)]
+
+    def next_points(self, class_values: np.ndarray | None = None,
+                    margin_values: np.ndarray | None = None) -> np.ndarray:
+        """The flat indices to compute at the next level (empty: refinement done).
+
+        ``class_values`` is the cube's class output (``CLASS_OUTPUT``) over ``shape`` with
+        every point asked for so far computed; ignored at the first level."""
+        self.level += 1
+        batches = []
+        if self.level == 0:
+            for origin in self._origins:
+                plane, pts = Plane.start(tuple(self.shape[i] for i in self.axes), self.stride)
+                self.planes.append(plane)
+                batches.append(self._flat(origin, pts))
+        else:
+            for plane, origin in zip(self.planes, self._origins):
+                classes = classify(self.path, self._plane_values(class_values, origin))
+                margin = None if margin_values is None else \
+                    self._plane_values(margin_values, origin)
+                pts = plane.step(classes, margin)
+                if len(pts):
+                    batches.append(self._flat(origin, pts))
+        flat = np.unique(np.concatenate(batches)) if batches else np.empty(0, np.int64)
+        flat = flat[~self.asked[flat]]
+        self.asked[flat] = True
+        return flat
+
+    def sources(self) -> np.ndarray:
+        """For every flat index, the computed point whose values it holds (itself when
+        computed); call when :meth:`next_points` has returned nothing."""
+        src = np.arange(self.asked.size)
+        for plane, origin in zip(self.planes, self._origins):
+            computed = self._plane_values(self.asked, origin)
+            local = plane.sources(computed).ravel()
+            nb = plane.shape[1]
+            pts = np.stack([local // nb, local % nb], axis=1)
+            all_pts = np.stack(np.unravel_index(np.arange(local.size), plane.shape), axis=1)
+            src[self._flat(origin, all_pts)] = self._flat(origin, pts)
+        return src

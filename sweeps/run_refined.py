@@ -1,0 +1,102 @@
+"""Running a refined sweep (``refine = true``; sweeps.refine): level after level through the
+same blocks, journal, lease and dask dispatch as an exhaustive sweep.
+
+A refined plan starts with no blocks. :func:`replay` rebuilds the refinement from what the
+cube (rebuilt from the journal) already holds: level by level it asks for the next points,
+cuts the new ones into blocks appended to ``plan.blocks`` in a fixed order (so a resumed run
+numbers its blocks exactly as the killed one did and the journal's blocks match), and stops
+at the first level with points still to compute. :func:`run` computes those and goes on.
+When no level asks for more, every other point is inferred (:func:`infer`): it takes the
+values of its source point, and the ``provenance`` flag says computed or inferred.
+"""
+from __future__ import annotations
+
+import math
+import time
+from contextlib import nullcontext
+
+import numpy as np
+
+import store
+from engine import status as S
+
+from . import run as R
+from .plan import Plan
+from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
+
+BLOCK_POINTS = {"simulate": 16, "averaged": 4096}   # points per block of a level
+
+
+def replay(plan: Plan, cube) -> list[int]:
+    """Rebuild ``plan.refinement`` and ``plan.blocks`` from ``cube``; the blocks still to
+    compute at the first unfinished level ([] when the refinement is complete, and then
+    the cube's inferred points are filled in)."""
+    coarse = plan.spec.refine.coarse if not isinstance(plan.spec.refine, bool) else None
+    plan.refinement = Refinement(plan.path, plan.shape, coarse)
+    plan.blocks = []
+    return _advance(plan, cube)
+
+
+def _advance(plan: Plan, cube) -> list[int]:
+    """Ask for levels until one has points not yet OK in ``cube``; their blocks."""
+    ref, status = plan.refinement, cube["status"].values.ravel()
+    values = cube[CLASS_OUTPUT[plan.path]].values
+    name = MARGIN_OUTPUT.get(plan.path)
+    margin = cube[name].values if name in cube else None
+    while True:
+        new = ref.next_points(values, margin)
+        if new.size == 0:
+            infer(plan, cube)
+            return []
+        start = len(plan.blocks)
+        plan.blocks += _cut(new, plan.path)
+        todo = [b for b in range(start, len(plan.blocks))
+                if np.any(status[plan.blocks[b]] != S.OK)]
+        if todo:
+            return todo
+
+
+def _cut(index: np.ndarray, path: str) -> list[np.ndarray]:
+    """A level's points in blocks of similar size, interleaved (cost spread evenly)."""
+    n_blocks = max(math.ceil(index.size / BLOCK_POINTS[path]), min(index.size, 2))
+    return [index[b::n_blocks] for b in range(n_blocks)]
+
+
+def infer(plan: Plan, cube) -> None:
+    """Fill every point not computed from its source (sweeps.refine) and set provenance."""
+    src = plan.refinement.sources()
+    asked = plan.refinement.asked
+    plan.sources = src
+    for name in store.cube.output_names(cube):
+        var = cube.variables[name]
+        var.load()
+        flat = var.data.reshape((asked.size,) + var.shape[4:])
+        flat[~asked] = flat[src[~asked]]
+    status = cube.variables["status"].data.reshape(-1)
+    status[~asked] = status[src[~asked]]
+    for name in ("cost_s", "steps", "evals"):
+        cube.variables[name].data.reshape(-1)[~asked] = 0
+    cube.variables[store.cube.PROVENANCE].data[...] = np.where(
+        asked, COMPUTED, INFERRED).reshape(plan.shape)
+
+
+def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timings,
+        client=None, dashboard=None) -> None:
+    """Compute ``todo`` (the first unfinished level's blocks), then every further level,
+    infer the rest, and (simulate) estimate the error on computed points."""
+    simulate = plan.path == "simulate"
+    own = simulate and client is None
+    t = time.perf_counter()
+    with (R.dask_client(scheduler, workers, dashboard) if own else nullcontext(client)) as c:
+        timings["cluster_s"] = time.perf_counter() - t
+        blocks = R._run_blocks if simulate or scheduler else R._run_blocks_local
+        t, level = time.perf_counter(), 0
+        while todo:
+            blocks(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
+                   timings={}, client=c)
+            if sink.stopped is not None:
+                return
+            todo, level = _advance(plan, sink.cube), level + 1
+        timings["compute_s"] = time.perf_counter() - t
+        if simulate and R._needs_estimate(plan, sink.sweep, sink.cube):
+            R.estimate_into(plan, c, sink, timings)
