@@ -1,0 +1,138 @@
+"""Adaptive refinement of map boundaries (issue 11, sweeps.refine): a synthetic class with a
+known boundary is recovered exactly; on real maps the refined and the full cube agree cell
+for cell; a refined sweep killed part-way resumes to the same cube."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+import store
+import sweeps
+from sweeps.refine import Refinement, default_stride
+
+from .conftest import BIN
+from .test_cluster_and_resume import assert_same_results, results
+
+
+def refine_synthetic(truth: np.ndarray, path="simulate", margin=None, coarse=None):
+    """Drive a Refinement over a known class field; (inferred class per point, computed)."""
+    ref = Refinement(path, truth.shape, coarse)
+    values = np.full(truth.size, np.nan)
+    while (idx := ref.next_points(values.reshape(truth.shape), margin)).size:
+        values[idx] = truth.ravel()[idx]
+    return truth.ravel()[ref.sources()].reshape(truth.shape), ref.asked.reshape(truth.shape)
+
+
+@pytest.mark.parametrize("n", [31, 61, 100])
+def test_a_known_boundary_is_recovered_exactly(n):
+    """Stick-slip below the line omega_c = 300 W (the scaling Fig. 14 suggests) on a
+    (W, omega) plane, two v_ref slices with different slopes: every cell's class is
+    recovered, and only a band along the boundary is computed."""
+    W, omega = np.linspace(0, 3, n), np.geomspace(10, 1000, n)
+    truth = np.zeros((n, n, 2, 1))
+    for k, slope in enumerate((300.0, 150.0)):
+        truth[:, :, k, 0] = omega[None, :] < slope * W[:, None]
+    inferred, computed = refine_synthetic(truth)
+    np.testing.assert_array_equal(inferred, truth)
+    share = computed.mean()
+    assert share < {31: 0.45, 61: 0.25, 100: 0.16}[n], share
+    assert computed[[0, 0, -1, -1], [0, -1, 0, -1]].all()   # the corners always are
+
+
+def test_a_disc_inside_the_lattice_is_recovered():
+    g = np.linspace(-1, 1, 65)
+    truth = np.zeros((65, 1, 65, 1))   # the averaged path's plane: (W, v_ref), axes 0 and 2
+    truth[:, 0, :, 0] = (g[:, None] ** 2 + g[None, :] ** 2) < 0.3
+    inferred, computed = refine_synthetic(truth, path="averaged")
+    np.testing.assert_array_equal(inferred, truth)
+    assert computed.mean() < 0.3
+
+
+def test_a_band_between_lattice_points_is_missed_without_a_margin_and_found_with_one():
+    """The limit of class-only refinement, and what the margin (max_real_eig) buys: a
+    stable band of three W values between two coarse lattice rows (stride 8), where the
+    largest eigenvalue dips below 0; both lattice rows are unstable, but the eigenvalue's
+    variation across the cell exceeds its distance from 0, so the cell is split."""
+    n = 33
+    a = np.arange(n, dtype=float)[:, None, None, None]
+    eig = np.broadcast_to((a - 14.3) ** 2 / 4 - 0.5, (n, 1, n, 1)).copy()
+    truth = (eig < 0).astype(float)          # stable = 1 on W indices 13..15
+    assert truth[:, 0, 0, 0].sum() == 3
+    inferred, _ = refine_synthetic(truth, path="averaged", coarse=8)
+    assert (inferred != truth).any()
+    inferred, _ = refine_synthetic(truth, path="averaged", margin=eig, coarse=8)
+    np.testing.assert_array_equal(inferred, truth)
+
+
+def test_default_stride_leaves_about_eight_steps():
+    assert [default_stride(n) for n in (5, 9, 17, 31, 61, 400)] == [1, 1, 2, 4, 8, 64]
+
+
+CHART = {"name": "refine-chart", "friction": "lugre", "method": "averaged",
+         "grid": {"W": {"start": 0.0, "stop": 1.2, "num": 61},
+                  "v_ref": {"start": 0.005, "stop": 1.2, "num": 60}, "v_d": [0.1, 0.01]}}
+ZONES = {"name": "refine-zones", "friction": "elastoplastic", "dither": "sine-velocity",
+         "outputs": ["long_stick_fraction"], "accuracy": "draft",
+         "params": {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}},
+         "time": {"t_end": 20.0, "t_transient": 5.0},
+         "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 13},
+                  "omega": {"start": 10.0, "stop": 1000.0, "num": 13, "scale": "log"},
+                  "v_ref": [0.1]}}
+
+
+def _pair(spec: dict, root):
+    full = sweeps.run_sweep(spec, store=root, progress=False)
+    ref = sweeps.run_sweep({**spec, "name": spec["name"] + "-r", "refine": True}, store=root,
+                           progress=False)
+    assert full.state == ref.state == "done"
+    return sweeps.open_sweep(full.sweep_id, root), sweeps.open_sweep(ref.sweep_id, root)
+
+
+def test_refined_stability_chart_labels_equal_the_full_grid(tmp_path):
+    full, ref = _pair(CHART, tmp_path)
+    for vd in (0.1, 0.01):
+        np.testing.assert_array_equal(store.stability_chart(ref, sel={"v_d": vd}).values,
+                                      store.stability_chart(full, sel={"v_d": vd}).values)
+    flags = ref["provenance"].values
+    assert set(np.unique(flags)) == {0, 1} and (flags == 0).mean() < 0.5
+    computed = flags == 0                          # computed points hold the full values
+    np.testing.assert_array_equal(ref["F_eff"].values[computed], full["F_eff"].values[computed])
+
+
+def test_refined_zone_map_equals_the_full_grid(tmp_path):
+    full, ref = _pair(ZONES, tmp_path)
+    np.testing.assert_array_equal(store.zone_map(ref).values, store.zone_map(full).values)
+    assert 0 < store.zone_map(full).values.mean() < 1         # a real boundary
+    assert "provenance" in store.table(ref).columns
+
+
+def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path):
+    spec = {**ZONES, "refine": True, "block_size": 1,
+            "time": {"t_end": 60.0, "t_transient": 5.0}}
+    path = tmp_path / "zones.json"
+    path.write_text(json.dumps(spec))
+    sid = sweeps.load_spec(spec).sweep_id
+    crashed, clean = tmp_path / "crashed", tmp_path / "clean"
+    journal = crashed / sid / "journal"
+    proc = subprocess.Popen([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)
+    t0 = time.monotonic()
+    while (len(list(journal.glob("*.npz"))) if journal.exists() else 0) < 4:
+        assert proc.poll() is None and time.monotonic() - t0 < 300, "no blocks journaled"
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    resumed = subprocess.run([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
+                             capture_output=True, text=True, timeout=600)
+    assert resumed.returncode == 0 and "done" in resumed.stdout, resumed.stderr
+    subprocess.run([str(BIN), "submit", str(path), "-q", "--store", str(clean)], check=True,
+                   capture_output=True, timeout=600)
+    a, b = (results(root / sid / "cube.nc") for root in (crashed, clean))
+    assert_same_results(a, b)   # provenance, steps and every output included
