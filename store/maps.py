@@ -28,7 +28,8 @@ from matplotlib.patches import Patch
 
 from . import attrs as A
 from .layout import atomic_write
-from .query import NO_DATA, PU, STABLE, SU, effective_friction_curve, stability_chart, zone_map
+from .query import (NO_DATA, PU, STABLE, SU, effective_friction_curve, plane, stability_chart,
+                    zone_map)
 
 FIGSIZE = (7.0, 5.0)
 DPI = 140
@@ -177,6 +178,19 @@ def _outline(ax, mask: xr.DataArray, x: str, y: str, style: str) -> None:
     ax.contour(xs, ys, fine, levels=[0.5], colors="k", linewidths=1.2, linestyles=style)
 
 
+def _mark_computed(ax, ds: xr.Dataset, sel, x: str, y: str) -> list:
+    """A refined sweep's computed points as small dots (the rest were inferred); the
+    legend handle, or nothing for an exhaustive sweep."""
+    if "provenance" not in ds:
+        return []
+    flags = plane(ds, "provenance", (y, x), sel, "map")
+    yy, xx = np.nonzero(flags.values == 0)
+    n, total = len(xx), flags.size
+    return ax.plot(flags[x].values[xx], flags[y].values[yy], linestyle="none", marker=".",
+                   markersize=2.0, color="0.15", alpha=0.6,
+                   label=f"computed ({n} of {total}; others inferred)")
+
+
 def stability_map(ds: xr.Dataset, path, sel=None, title: str | None = None) -> Path:
     """Fig. 9-style stability chart of an averaged cube, written to ``path`` (PNG).
 
@@ -195,6 +209,7 @@ def stability_map(ds: xr.Dataset, path, sel=None, title: str | None = None) -> P
         for k in (STABLE, PU, SU, NO_DATA)
         if k in present or k in (PU, SU)
     ]
+    handles += _mark_computed(ax, ds, sel, "v_ref", "W")
     if hi > lo:
         handles += ax.plot(
             [lo, hi],
@@ -232,6 +247,7 @@ def stick_slip_map(
         handles.append(
             Patch(facecolor=NO_DATA_COLOUR, edgecolor="0.3", label=STABILITY_NAMES[NO_DATA])
         )
+    handles += _mark_computed(ax, ds, sel, "omega", "W")
     ax.legend(
         handles=handles,
         loc="upper left",

@@ -22,7 +22,7 @@ import pandas as pd
 import xarray as xr
 from scipy import ndimage
 
-from .cube import AXES, OK, output_names
+from .cube import AXES, OK, PROVENANCE, output_names
 
 NO_DATA, STABLE, PU, SU = -1, 0, 1, 2
 STABILITY_MEANINGS = "no_data stable primary_unstable secondary_unstable"
@@ -67,7 +67,7 @@ def select(ds: xr.Dataset, sel: Mapping[str, object] | None = None) -> xr.Datase
 
 
 def _variable(ds: xr.Dataset, var: str, what: str) -> None:
-    if var not in output_names(ds):
+    if var not in output_names(ds) and not (var == PROVENANCE and var in ds):
         raise ValueError(f"{what}: the cube has no variable {var!r}; available: {output_names(ds)}")
 
 
