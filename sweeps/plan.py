@@ -28,7 +28,10 @@ from .spec import Spec
 # (scripts/bench_sweep.py: 1000 points at 6 ms in 125 blocks lose 29 % to it, in 8 blocks
 # 4 %), so blocks are made as large as load balance and resume granularity allow; the
 # interleaved layout gives the blocks equal cost, so 4 per worker keep both cores busy.
-BLOCK_POINTS = {"simulate": (16, 256), "averaged": (4096, 65536), "hbm": (8, 64)}
+BLOCK_POINTS = {"simulate": (1, 16), "averaged": (4096, 65536), "hbm": (8, 64)}
+# a simulated point costs ~ its number of dither periods, omega * t_end, on top of the slow
+# dynamics (about OMEGA_FLOOR rad per unit tau of steps): blocks are balanced by that
+OMEGA_FLOOR = 50.0
 MIN_BLOCKS = 8
 
 
@@ -100,6 +103,33 @@ def interleaved_blocks(n_points: int, n_blocks: int) -> list[np.ndarray]:
     return [np.arange(b, n_points, n_blocks) for b in range(n_blocks)]
 
 
+def balanced_blocks(cost: np.ndarray, n_blocks: int) -> list[np.ndarray]:
+    """Points into ``n_blocks`` blocks of nearly equal total ``cost`` (largest first onto
+    the cheapest block so far), each block's indices sorted; the costliest blocks come
+    first, so the dispatch starts the long work early and both workers finish together."""
+    import heapq
+
+    heap = [(0.0, b) for b in range(n_blocks)]
+    members: list[list[int]] = [[] for _ in range(n_blocks)]
+    for i in np.argsort(-cost, kind="stable"):
+        total, b = heapq.heappop(heap)
+        members[b].append(int(i))
+        heapq.heappush(heap, (total + float(cost[i]), b))
+    totals = [sum(float(cost[i]) for i in m) for m in members]
+    order = sorted(range(n_blocks), key=lambda b: -totals[b])
+    return [np.array(sorted(members[b]), dtype=np.int64) for b in order if members[b]]
+
+
+def point_costs(spec: Spec, coords: dict[str, np.ndarray]) -> np.ndarray:
+    """Relative cost per grid point (C order): ``max(omega, OMEGA_FLOOR)`` for a dithered
+    simulation (the time span is the same for every point), 1 elsewhere."""
+    shape = tuple(len(v) for v in coords.values())
+    if spec.method != "simulate" or spec.dither == "none":
+        return np.ones(math.prod(shape))
+    omega = np.maximum(np.abs(coords["omega"]), OMEGA_FLOOR)
+    return np.broadcast_to(omega[None, :, None, None], shape).ravel()
+
+
 def make_plan(spec: Spec, level: str | None = None) -> Plan:
     """Plan ``spec`` (at its own accuracy, or at ``level`` for estimates)."""
     p = base_params(spec)
@@ -110,7 +140,12 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
+    if spec.refine:
+        blocks = []   # known level by level (sweeps.run_refined)
+    elif spec.method == "simulate":
+        blocks = balanced_blocks(point_costs(spec, coords), n_blocks)
+    else:
+        blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, coords=coords,
-                blocks=[] if spec.refine else interleaved_blocks(n, n_blocks))
+                outputs=outputs, coords=coords, blocks=blocks)

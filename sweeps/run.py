@@ -421,7 +421,7 @@ def _done_blocks(plan: Plan, cube) -> list[int]:
 
 def _run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
                 progress, timings, client=None, dashboard=None) -> None:
-    bar = _progress_bar(plan, len(todo), progress)
+    bar = _progress_bar(plan, todo, progress)
     t = time.perf_counter()
     with (nullcontext(client) if client is not None
           else dask_client(scheduler, workers, dashboard)) as cluster_client:
@@ -554,8 +554,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar) -> None
     if not sink.should_stop():
         fill()
     for future in done:
-        sink(inflight.pop(future), future.result())
-        bar.update(1)
+        b = inflight.pop(future)
+        sink(b, future.result())
+        bar.update(len(plan.blocks[b]))
         if not sink.should_stop():
             fill()
 
@@ -564,7 +565,7 @@ def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler
                       progress, timings, client=None, dashboard=None) -> None:
     """The analysis paths cost microseconds per point: starting a cluster would cost
     more than the whole sweep, so they run in this process."""
-    bar = _progress_bar(plan, len(todo), progress)
+    bar = _progress_bar(plan, todo, progress)
     t = time.perf_counter()
     sink.started()
     for b in todo:
@@ -572,16 +573,19 @@ def _run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler
             break
         sink(b, compute_block(plan.scene, plan.block_points(b), plan.params,
                               plan.numerics.settings))
-        bar.update(1)
+        bar.update(len(plan.blocks[b]))
     timings["compute_s"] = time.perf_counter() - t
     bar.close()
 
 
-def _progress_bar(plan: Plan, n: int, enabled: bool):
+def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
+    """Progress in points (blocks are small and cost-balanced: sweeps.plan), with tqdm's
+    rate and ETA."""
     from tqdm import tqdm
 
-    return tqdm(total=n, unit="block", desc=f"{plan.spec.name} [{plan.sweep_id}]",
-                disable=not enabled, mininterval=0.5)
+    return tqdm(total=sum(len(plan.blocks[b]) for b in todo), unit="point",
+                desc=f"{plan.spec.name} [{plan.sweep_id}]", disable=not enabled,
+                mininterval=0.5)
 
 
 def _counts(cube) -> dict:

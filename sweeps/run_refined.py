@@ -21,7 +21,7 @@ import store
 from engine import status as S
 
 from . import run as R
-from .plan import Plan
+from .plan import Plan, balanced_blocks, point_costs
 from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
 
 BLOCK_POINTS = {"simulate": 16, "averaged": 4096}   # points per block of a level
@@ -49,17 +49,19 @@ def _advance(plan: Plan, cube) -> list[int]:
             infer(plan, cube)
             return []
         start = len(plan.blocks)
-        plan.blocks += _cut(new, plan.path)
+        plan.blocks += _cut(plan, new)
         todo = [b for b in range(start, len(plan.blocks))
                 if np.any(status[plan.blocks[b]] != S.OK)]
         if todo:
             return todo
 
 
-def _cut(index: np.ndarray, path: str) -> list[np.ndarray]:
-    """A level's points in blocks of similar size, interleaved (cost spread evenly)."""
-    n_blocks = max(math.ceil(index.size / BLOCK_POINTS[path]), min(index.size, 2))
-    return [index[b::n_blocks] for b in range(n_blocks)]
+def _cut(plan: Plan, index: np.ndarray) -> list[np.ndarray]:
+    """A level's points in blocks of balanced estimated cost (sweeps.plan), at least two
+    (both workers busy)."""
+    n_blocks = max(math.ceil(index.size / BLOCK_POINTS[plan.path]), min(index.size, 2))
+    cost = point_costs(plan.spec, plan.coords)[index]
+    return [index[b] for b in balanced_blocks(cost, n_blocks)]
 
 
 def infer(plan: Plan, cube) -> None:

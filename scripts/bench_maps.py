@@ -1,0 +1,125 @@
+"""Maps at the speed of thought (issue 11): full grid against adaptive refinement, in one run.
+
+For Fig. 14 (the elasto-plastic zone map, specs/fig14.toml, standard accuracy) at 31x31 and
+61x61 and for Fig. 9 (the averaged stability chart, 400x400 over (v_ref, W), v_d = 0.1) it
+prints: points computed, wall time (``ditherlab submit`` as a subprocess, process start to
+exit: imports, cluster start and compute), the ratio, and the share of cells whose class
+(zone, or stable / PU / SU label) agrees with the full grid.
+
+Targets (issue 11): refined Fig. 14 31x31 <= 25 % of points, >= 99 % agreement, <= 30 s;
+61x61 <= 12 %; Fig. 9 400x400 end to end <= 2 s, refined labels identical.
+
+    python scripts/bench_maps.py                 # everything (the full 61x61 takes long)
+    python scripts/bench_maps.py --skip-full 61  # the 61x61 full grid from its plan estimate
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+import store   # noqa: E402
+import sweeps  # noqa: E402
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown CPU"
+
+
+def fig14(n: int, refine: bool) -> dict:
+    spec = tomllib.loads((ROOT / "specs" / "fig14.toml").read_text())
+    spec["grid"]["W"]["num"] = spec["grid"]["omega"]["num"] = n
+    spec["name"] = f"bench-fig14-{n}" + ("-refined" if refine else "")
+    return {**spec, "refine": True} if refine else spec
+
+
+def fig09(refine: bool) -> dict:
+    spec = {"name": "bench-fig09-400" + ("-refined" if refine else ""), "friction": "lugre",
+            "dither": "square-velocity", "method": "averaged",
+            "outputs": ["F_eff", "max_real_eig", "stable"],
+            "grid": {"W": {"start": 0.0, "stop": 1.2, "num": 400},
+                     "v_ref": {"start": 0.005, "stop": 1.2, "num": 400}, "v_d": [0.1]}}
+    return {**spec, "refine": True} if refine else spec
+
+
+def submit(spec: dict, root: Path) -> tuple[float, str]:
+    """Wall seconds of `ditherlab submit` (a fresh process) and the sweep id."""
+    path = root / f"{spec['name']}.json"
+    path.write_text(json.dumps(spec))
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "sweeps.cli", "submit", str(path), "-q", "--store",
+                    str(root / "store")], check=True, capture_output=True)
+    return time.perf_counter() - t0, sweeps.load_spec(spec).sweep_id
+
+
+def classes(ds, kind: str) -> np.ndarray:
+    if kind == "zone":
+        return store.zone_map(ds).values
+    return store.stability_chart(ds, sel={"v_d": 0.1}).values
+
+
+def computed(ds) -> int:
+    return int((ds["provenance"].values == 0).sum()) if "provenance" in ds \
+        else int(ds["status"].size)
+
+
+def estimate_s(spec: dict) -> float:
+    from sweeps.calibrate import estimates
+
+    level = spec.get("accuracy", "standard")
+    return next(e.wall_s for e in estimates(sweeps.load_spec(spec)) if e.level == level)
+
+
+def row(label: str, kind: str, full_spec: dict, ref_spec: dict, root: Path, skip_full: bool):
+    t_ref, ref_id = submit(ref_spec, root)
+    ref = sweeps.open_sweep(ref_id, root / "store")
+    n = int(ref["status"].size)
+    if skip_full:
+        t_full, agree = estimate_s(full_spec), float("nan")
+        note = "full: plan estimate (not run)"
+    else:
+        t_full, full_id = submit(full_spec, root)
+        full = sweeps.open_sweep(full_id, root / "store")
+        agree = float(np.mean(classes(full, kind) == classes(ref, kind)))
+        note = ""
+    k = computed(ref)
+    print(f"{label:<22}{n:>8}{k:>10}{k / n:>8.1%}{t_full:>10.1f}{t_ref:>10.1f}"
+          f"{t_full / t_ref:>8.1f}x{agree:>10.2%}  {note}", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--skip-full", type=int, nargs="*", default=[],
+                    help="Fig. 14 sizes whose full grid is estimated, not run (e.g. 61)")
+    ap.add_argument("--sizes", type=int, nargs="*", default=[31, 61])
+    args = ap.parse_args()
+    print(f"CPU: {cpu_model()}; {platform.python_version()}; 2 dask workers (default)")
+    print(f"{'map':<22}{'points':>8}{'computed':>10}{'share':>8}{'full s':>10}{'refined s':>10}"
+          f"{'ratio':>9}{'agree':>10}")
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        for n in args.sizes:
+            row(f"Fig. 14 {n}x{n} standard", "zone", fig14(n, False), fig14(n, True), root,
+                n in args.skip_full)
+        row("Fig. 9 400x400 averaged", "chart", fig09(False), fig09(True), root, False)
+
+
+if __name__ == "__main__":
+    main()
