@@ -28,10 +28,16 @@ from .spec import Spec
 # (scripts/bench_sweep.py: 1000 points at 6 ms in 125 blocks lose 29 % to it, in 8 blocks
 # 4 %), so blocks are made as large as load balance and resume granularity allow; the
 # interleaved layout gives the blocks equal cost, so 4 per worker keep both cores busy.
-BLOCK_POINTS = {"simulate": (1, 16), "averaged": (4096, 65536), "hbm": (8, 64)}
-# a simulated point costs ~ its number of dither periods, omega * t_end, on top of the slow
-# dynamics (about OMEGA_FLOOR rad per unit tau of steps): blocks are balanced by that
+BLOCK_POINTS = {"simulate": (16, 256), "averaged": (4096, 65536), "hbm": (8, 64)}
+# A simulated point costs ~ its number of dither periods, omega * t_end, on top of the slow
+# dynamics (about OMEGA_FLOOR rad per unit tau of steps): blocks are balanced by that, and
+# sized to take about BLOCK_SECONDS each (SECONDS_PER_RADIAN: a rough price of one radian
+# of dither at standard accuracy, fitted to Fig. 14's 3.2 min on 2 cores), so progress
+# moves every second or two whatever the grid, and cheap sweeps keep few blocks (each
+# block costs ~7 ms of bookkeeping).
 OMEGA_FLOOR = 50.0
+SECONDS_PER_RADIAN = 1e-5
+BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
 
 
@@ -140,6 +146,9 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
+    if spec.method == "simulate" and not spec.block_size:
+        seconds = point_costs(spec, coords).sum() * spec.time.t_end * SECONDS_PER_RADIAN
+        n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run_refined)
     elif spec.method == "simulate":

@@ -320,6 +320,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     if "compute_s" in timings and max_blocks is None and sink.stopped is None:
         history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
                               timings["compute_s"])
+    log.debug("sweep %s timings: %s", plan.sweep_id,
+              ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()) or "-")
     return _result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run, t0=t0,
                    timings=timings, lease=lease, stopped=sink.stopped,
                    max_blocks=max_blocks)

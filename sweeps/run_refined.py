@@ -24,7 +24,7 @@ from . import run as R
 from .plan import Plan, balanced_blocks, point_costs
 from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
 
-BLOCK_POINTS = {"simulate": 16, "averaged": 4096}   # points per block of a level
+BLOCK_POINTS = {"simulate": 8, "averaged": 4096}   # points per block of a level (at most)
 
 
 def replay(plan: Plan, cube) -> list[int]:
