@@ -236,6 +236,11 @@ def check_store(root, write: bool) -> Path:
         if exists and not root.is_dir():
             raise StorePathError(f"store path {root} is not a folder; pass --store DIR "
                                  "(or set $DITHERLAB_STORE) naming a folder")
+        if not exists:   # a store to be made: no file may stand where a folder must be
+            above = next((a for a in root.absolute().parents if a.exists()), None)
+            if above is not None and not above.is_dir():
+                raise StorePathError(f"store path {root} cannot be used: {above} is a file; "
+                                     "pass --store DIR naming a folder")
     except OSError as err:   # ENAMETOOLONG, ELOOP, EACCES on a parent
         raise StorePathError(f"store path {_short(root)} cannot be used: "
                              f"{err.strerror}") from None

@@ -164,7 +164,7 @@ def test_disk_full_before_anything_is_one_line_not_a_segfault(avg, tmpfs):
     disk = tmpfs("200k")
     proc = ditherlab("submit", str(path), "--quiet", store=disk / "store")
     assert proc.returncode == 1, proc.stderr
-    (line,) = _stderr_lines(proc)[1:]   # after the 'sweep ...: N points' line
+    (line,) = _stderr_lines(proc)   # --quiet: the one error line alone
     assert line.startswith(f"ditherlab: no space left on device writing {disk}/store/")
     assert "MB and submit again; the journal keeps the 0 finished blocks (of 8)" in line
     assert "Traceback" not in proc.stderr
@@ -186,7 +186,7 @@ def test_disk_full_keeps_the_previous_cube_and_resumes_when_freed(avg, tmpfs):
         f.write(b"\0" * max(0, store.layout.free_bytes(root) - 48 * 1024))
     proc = ditherlab("submit", str(path), "--quiet", store=root)
     assert proc.returncode == 1
-    (line,) = _stderr_lines(proc)[1:]
+    (line,) = _stderr_lines(proc)
     assert "no space left on device writing" in line
     assert line.endswith("the journal keeps the 3 finished blocks (of 8)")
     assert cube.read_bytes() == before            # the previous cube, untouched
@@ -274,7 +274,7 @@ def test_read_commands_work_on_a_read_only_store_and_submit_says_why_not(avg, tm
               str(tmp_path / "f.png"), store=ro, check=True)
     proc = ditherlab("submit", str(path), "--quiet", store=ro)
     assert proc.returncode == 1
-    assert _stderr_lines(proc)[1:] == [
+    assert _stderr_lines(proc) == [   # --quiet: the one error line alone
         f"ditherlab: store {ro} is read-only (Read-only file system): cannot write there; "
         "status, query and map still read it"]
     assert sorted(p.name for p in clean.iterdir()) == before
