@@ -228,7 +228,8 @@ class ExplicitAccuracy(_Strict):
 
 class Refine(_Strict):
     """Adaptive refinement of the map's class boundary (sweeps.refine): ``coarse`` is the
-    stride of the first lattice (a power of two; default about 8 steps per map axis)."""
+    stride of the first lattice (a power of two; default about 4 lattice steps per axis of a
+    zone map, 8 of a stability chart: sweeps.refine.FIRST_STEPS)."""
 
     coarse: Annotated[int, Field(ge=1, le=1 << 20)] | None = None
 

@@ -70,8 +70,8 @@ def test_a_band_between_lattice_points_is_missed_without_a_margin_and_found_with
     np.testing.assert_array_equal(inferred, truth)
 
 
-def test_default_stride_leaves_about_eight_steps():
-    assert [default_stride(n) for n in (5, 9, 17, 31, 61, 400)] == [1, 1, 2, 4, 8, 64]
+def test_default_stride_leaves_about_four_steps():
+    assert [default_stride(n) for n in (5, 9, 17, 31, 61, 400)] == [1, 2, 4, 8, 16, 128]
 
 
 CHART = {"name": "refine-chart", "friction": "lugre", "method": "averaged",
