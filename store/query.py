@@ -88,7 +88,7 @@ def plane(
                 f"choose one with sel={{'{axis}': value}} (--sel {axis}=VALUE)"
             )
     squeeze = {a: 0 for a in AXES if a not in dims}
-    sub = sub.isel(squeeze).transpose(*dims)
+    sub = sub.isel(squeeze).transpose(*dims, ...)   # a vector output keeps its own dim last
     return sub[var].where(sub["status"] == OK)
 
 

@@ -136,3 +136,19 @@ def test_select_is_nearest_neighbour():
 def test_error_messages(call, message):
     with pytest.raises(ValueError, match=message):
         call(averaged_cube())
+
+
+def test_zone_map_of_a_cube_with_a_vector_output(tmp_path):
+    """Fig. 14's cube holds alpha_hist over alpha_bin: the map's plane keeps that dim out of
+    the way (found by scripts/bench_maps.py: `transpose` refused the extra dim), and the
+    map draws."""
+    outputs = {"long_stick_fraction": ("fraction in long sticks", "1"),
+               "alpha_hist": ("alpha shares", "1", ("alpha_bin", 10))}
+    ds = store.empty_cube(
+        {"W": [0.0, 1.0], "omega": [10.0, 100.0, 1000.0], "v_ref": [0.1], "v_d": [0.1]}, outputs
+    )
+    ds["long_stick_fraction"].values[..., 0, 0] = [[0.0, 0.05, 0.3], [0.0, 0.0, 0.7]]
+    ds["status"].values[...] = 0
+    np.testing.assert_array_equal(store.zone_map(ds).values, [[0, 1, 1], [0, 0, 1]])
+    store.stick_slip_map(ds, tmp_path / "zones.png")
+    assert (tmp_path / "zones.png").stat().st_size > 1000
