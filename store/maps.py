@@ -110,12 +110,22 @@ def _edges(values: np.ndarray, log: bool) -> np.ndarray:
     return np.exp(edges) if log else edges
 
 
+# what a non-dimensional quantity is measured in, as its long_name says after a comma
+# (CF units are "1": store.cube), in the short form an axis label has room for
+MEASURED_IN = {"rad per unit of the non-dimensional time tau": r"[rad per unit $\tau$]",
+               "in units of the non-dimensional time tau": r"[$\tau$]"}
+
+
 def axis_label(coord: xr.DataArray) -> str:
-    """``"<symbol> - <long_name> [units]"`` ("non-dimensional" for units "1")."""
+    """``"<symbol>  <long_name> [units]"`` ("non-dimensional" for units "1"; a long_name's
+    ", rad per unit of the non-dimensional time tau" becomes the unit)."""
     name = str(coord.name)
     units = coord.attrs.get("units", "")
     unit_text = "(non-dimensional)" if units in ("1", "") else f"[{units}]"
     long_name = coord.attrs.get("long_name", name)
+    head, _, tail = long_name.partition(", ")
+    if tail in MEASURED_IN:
+        long_name, unit_text = head, MEASURED_IN[tail]
     return f"{SYMBOLS.get(name, name)}  {long_name} {unit_text}"
 
 
