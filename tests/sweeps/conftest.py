@@ -1,4 +1,5 @@
 """Helpers for end-to-end tests through the real command line."""
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -6,6 +7,14 @@ from pathlib import Path
 import pytest
 
 BIN = Path(sys.executable).parent / "ditherlab"
+
+
+def as_a_terminal_job() -> None:
+    """``preexec_fn`` for a submitter that a test Ctrl-C's: SIGINT back to its default, as in
+    a terminal's foreground job. A test run started in the background of a script (``.ci/run
+    &``, nohup in a non-interactive shell) inherits SIGINT ignored, and Python keeps it
+    ignored, so the child would never see the test's Ctrl-C and run to the end."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 SIMULATE_SPEC = """
 name = "e2e-sim"

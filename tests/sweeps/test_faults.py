@@ -20,7 +20,7 @@ from sweeps.plan import make_plan
 from sweeps.run import empty_cube, submit
 from sweeps.spec import load_spec
 
-from .conftest import AVERAGED_SPEC, BIN, ditherlab
+from .conftest import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab
 from .test_cluster_and_resume import RESUME_SPEC, _wait_for
 
 N_BLOCKS_AVG = 8   # AVERAGED_SPEC: 525 points in 8 blocks, computed in-process (no dask)
@@ -322,7 +322,7 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
     journal = root / spec.sweep_id / "journal"
     proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(root)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=as_a_terminal_job)
     _wait_for(lambda: len(list(journal.glob("block-*.npz"))) >= 2 or proc.poll() is not None,
               300, "two journaled blocks", poll=0.02)
     os.killpg(proc.pid, signal.SIGINT)

@@ -22,7 +22,7 @@ from sweeps.run import block_key
 from sweeps.run import compute_block as REAL_COMPUTE_BLOCK
 from sweeps.spec import load_spec
 
-from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC
+from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
 # 16 one-point blocks of ~0.3-2 s each: time to act on a running sweep between blocks
@@ -294,7 +294,7 @@ def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, 
     sid = load_spec(path).sweep_id
     proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(root)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
-                            start_new_session=True)
+                            start_new_session=True, preexec_fn=as_a_terminal_job)
     try:
         _wait_for(lambda: _journaled(root, sid) >= 2, 300, "two journaled blocks", poll=0.05)
         os.killpg(proc.pid, signal.SIGINT)   # Ctrl-C reaches the whole process group
