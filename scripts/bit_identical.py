@@ -1,0 +1,200 @@
+"""Restructuring without changing a bit: record the engine's numbers, then compare.
+
+    .venv/bin/python scripts/bit_identical.py record out/bits-before.npz     # before the change
+    .venv/bin/python scripts/bit_identical.py compare out/bits-before.npz    # after it
+
+What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
+
+- **every cube of ``specs/``**, run at its full grid into a temporary store through the Python
+  API (``sweeps.run_sweep``), all data variables except the wall-clock ``cost_s``;
+- **engine probes**: one trajectory per compile-time scene variant that the simulate path can
+  take (each friction law x each dither on the slider, each integrator, the contact system
+  with each law, each effect flag switched off), with its steps recorded (t, y), its outputs,
+  final state and step counters;
+- **the hard cases** of ``tests/hard`` run in CI (stiff contacts, tiny velocities, fast
+  dither), at the tolerances of their tests, recorded step by step.
+
+``--quick`` thins each spec's axes to every third value (for iterating; the acceptance run is
+the full one). A difference prints the key, how many elements differ and the largest
+difference; the exit status is 1 if anything differs or is missing.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+PROBE = {"v_ref": 0.4, "W": 0.4, "omega": 300.0, "t_end": 3.0, "t_transient": 1.0}
+CONTACT_PROBE = {"t_end": 0.05, "t_transient": 0.01}
+LAWS = ("coulomb", "stribeck", "lugre", "elastoplastic")
+DITHERS = ("none", "square-velocity", "sine-velocity", "sine-force")
+
+
+def _scenes():
+    """(key, Scene keywords, parameter overrides, defaults) of every engine probe."""
+    from engine.outputs import SIMULATE
+
+    outputs = tuple(SIMULATE)
+    for law in LAWS:
+        for dither in DITHERS:
+            yield (f"slider/{law}/{dither}/dopri5",
+                   dict(friction=law, dither=dither, method="dopri5", outputs=outputs),
+                   PROBE, None)
+    for method in ("rk4", "rodas4"):
+        for law in ("lugre", "elastoplastic"):
+            yield (f"slider/{law}/square-velocity/{method}",
+                   dict(friction=law, method=method, outputs=outputs), PROBE, None)
+    for flag in ("stribeck", "bristle_damping", "viscous"):
+        yield (f"slider/lugre/square-velocity/dopri5/no-{flag}",
+               dict(method="dopri5", outputs=outputs, **{flag: False}), PROBE, None)
+    yield ("slider/lugre/square-velocity/dopri5/slow-force",
+           dict(method="dopri5", outputs=outputs, slow_force=True),
+           {**PROBE, "slow_a": 0.1, "slow_omega": 2.0}, None)
+    for law in LAWS:
+        for method in ("dopri5", "rodas4"):
+            yield (f"contact/{law}/sine-velocity/{method}",
+                   dict(system="contact", friction=law, dither="sine-velocity", method=method,
+                        outputs=("F_mean", "v_mean")),
+                   CONTACT_PROBE, "contact")
+
+
+def engine_probes() -> dict:
+    from engine import params as P
+    from engine.api import simulate
+    from engine.scene import Scene
+
+    found = {}
+    for key, kw, over, defaults in _scenes():
+        base = P.CONTACT_DEFAULTS if defaults == "contact" else None
+        try:
+            sim = simulate(Scene(**kw), P.pack(base, **over), record=True, max_records=200_000)
+        except ValueError as err:   # a combination the engine refuses: the refusal is recorded
+            found[f"probe/{key}/refused"] = np.frombuffer(str(err).encode(), dtype=np.uint8)
+            continue
+        found[f"probe/{key}/t"] = sim.t
+        found[f"probe/{key}/y"] = sim.y
+        found[f"probe/{key}/y_end"] = sim.y_end
+        found[f"probe/{key}/counts"] = np.array(
+            [sim.status, sim.steps, sim.rejected, sim.evals], dtype=np.float64)
+        found[f"probe/{key}/outputs"] = np.array(list(sim.outputs.values()))
+        if sim.alpha_hist is not None:
+            found[f"probe/{key}/alpha_hist"] = sim.alpha_hist
+    return found
+
+
+def hard_cases() -> dict:
+    sys.path.insert(0, str(ROOT / "tests" / "hard"))
+    from tests.hard import hardcases
+    from tests.hard.test_hard_cases import CI
+
+    found = {}
+    for case in CI:
+        r = hardcases.run(case.params, case.method, case.rtol, case.budget, record=case.record)
+        key = f"hard/{case.name}/{case.method}"
+        found[f"{key}/q"] = r.q
+        found[f"{key}/counts"] = np.array([r.status, r.steps, r.rejected, r.evals, r.z_max])
+        found[f"{key}/outputs"] = np.array(list(r.outputs.values()))
+    return found
+
+
+def _thin(spec):
+    """Every third value of each list axis; a third of the points of each range axis."""
+    def thin(axis):
+        if isinstance(axis, list):
+            return axis[::3]
+        if isinstance(axis, dict):
+            return {**axis, "num": max(2, axis["num"] // 3)}
+        return axis
+    data = spec.model_dump()
+    data["grid"] = {k: thin(v) for k, v in data["grid"].items()}
+    return type(spec).model_validate(data)
+
+
+def spec_cubes(quick: bool) -> dict:
+    import xarray as xr
+
+    import sweeps
+    from sweeps.spec import load_spec
+
+    found = {}
+    with tempfile.TemporaryDirectory() as store:
+        for path in sorted((ROOT / "specs").glob("*.toml")):
+            spec = load_spec(path)
+            if quick:
+                spec = _thin(spec)
+            t0 = time.perf_counter()
+            res = sweeps.run_sweep(spec, store=store, progress=False)
+            with xr.open_dataset(res.cube_path, engine="h5netcdf") as ds:
+                for name, var in ds.data_vars.items():
+                    if name != "cost_s":
+                        found[f"spec/{path.stem}/{name}"] = np.asarray(var.values)
+            print(f"  {path.name}: {time.perf_counter() - t0:.1f} s", flush=True)
+    return found
+
+
+def collect(quick: bool) -> dict:
+    t0 = time.perf_counter()
+    found = engine_probes()
+    print(f"engine probes: {len(found)} arrays, {time.perf_counter() - t0:.1f} s", flush=True)
+    t0 = time.perf_counter()
+    found |= hard_cases()
+    print(f"hard cases: {time.perf_counter() - t0:.1f} s", flush=True)
+    found |= spec_cubes(quick)
+    return found
+
+
+def _same(a, b) -> bool:
+    if a.shape != b.shape or a.dtype != b.dtype:
+        return False
+    if a.dtype.kind == "f":
+        return a.tobytes() == b.tobytes() or bool(np.array_equal(a, b, equal_nan=True))
+    return bool(np.array_equal(a, b))
+
+
+def compare(before: dict, after: dict) -> int:
+    bad = 0
+    for key in sorted(before.keys() | after.keys()):
+        if key not in after or key not in before:
+            print(f"MISSING {'after' if key not in after else 'before'}: {key}")
+            bad += 1
+            continue
+        a, b = before[key], after[key]
+        if not _same(a, b):
+            bad += 1
+            if a.shape == b.shape and a.dtype.kind == b.dtype.kind == "f":
+                diff = np.abs(a - b)
+                n = int(np.count_nonzero(~((a == b) | (np.isnan(a) & np.isnan(b)))))
+                print(f"DIFFERS {key}: {n} of {a.size} elements, max |diff| {np.nanmax(diff):.3g}")
+            else:
+                print(f"DIFFERS {key}: shape {a.shape} {a.dtype} vs {b.shape} {b.dtype}")
+    print(f"{len(before)} arrays recorded, {len(after)} now: "
+          + ("all bit-identical" if not bad else f"{bad} differ or are missing"))
+    return 1 if bad else 0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("action", choices=("record", "compare"))
+    ap.add_argument("file", type=Path)
+    ap.add_argument("--quick", action="store_true", help="every third grid value of each spec")
+    args = ap.parse_args()
+    found = collect(args.quick)
+    if args.action == "record":
+        args.file.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(args.file, **found)
+        print(f"recorded {len(found)} arrays in {args.file}")
+        return 0
+    with np.load(args.file) as npz:
+        before = {k: npz[k] for k in npz.files}
+    return compare(before, found)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
