@@ -58,10 +58,10 @@ import numpy as np
 
 from . import params as P
 from .dither import CODE, NONE
-from .friction.elastoplastic import PRESLIDE, SLIDE, STICK
+from .friction.elastoplastic import STICK, phase
+from .friction.stribeck import make_g
 from .jit import njit
 from .outputs import SIMULATE, VECTOR
-from .systems.laws import make_g
 
 O_ON, O_T0, O_X0, O_Q0 = 0, 1, 2, 3
 O_T_STICK, O_T_PRE, O_T_SLIP = 4, 5, 6
@@ -100,15 +100,6 @@ def check_outputs(outputs) -> None:
     if bad:
         raise ValueError(f"outputs: unknown simulate observable(s) {bad}; "
                          f"known: {tuple(SIMULATE)}")
-
-
-@njit(inline="always", error_model="numpy")
-def _phase(a):
-    if a == 0.0:
-        return STICK
-    if a == 1.0:
-        return SLIDE
-    return PRESLIDE
 
 
 def make_observer(scene, system) -> Observer:
@@ -363,7 +354,7 @@ def _add_phase(obs, t0, t1, a, long_stick, hist):
     """Book the step [t0, t1] to the phase of its midpoint alpha ``a`` (sticking steps of
     every law; every step of the laws without alpha) and update sticking runs."""
     h = t1 - t0
-    ph = _phase(a)
+    ph = phase(a)
     obs[O_T_STICK + ph] += h
     if a >= 1.0:
         obs[O_T_NEAR] += h

@@ -23,6 +23,8 @@ from engine import params as P
 from engine.analysis import effective_friction, negative_slope_zones
 from engine.friction.stribeck import g
 
+PAPER = P.pack()
+
 WS = (0.25, 0.5, 1.0)
 OUT = os.path.join(os.path.dirname(__file__), "..", "out")
 
@@ -43,7 +45,7 @@ def report_slopes():
     print("\nlow-velocity slope d<F>/dv at v = 0 (sigma2 = 0.004)")
     print(f"{'W':>5s} {'Eq.5.13':>10s} {'5.12 exact':>11s} {'LuGre vd=.1':>12s} {'LuGre vd=.01':>13s} {'static':>9s}")
     for W in (0.1, 0.15, 0.2) + WS:
-        row = [(1 + W * 0.004) / W, g(W, 1.0, 1.5, 0.1, 2.0) / W + 0.004]
+        row = [(1 + W * 0.004) / W, g(W, PAPER) / W + 0.004]
         row += [effective_friction(0.0, W, P.pack(vd=vd), slope=True)[1] for vd in (0.1, 0.01)]
         row += [effective_friction(0.0, W, p, model="static", slope=True)[1]]
         print(f"{W:5.2f} " + " ".join(f"{x:10.5f} " for x in row))

@@ -38,8 +38,8 @@ def test_package_imports_with_others_blocked(package):
 # a function is the sanctioned way to defer a heavy or optional dependency, and runs only
 # when called; it is not an edge here.
 
-import ast  # noqa: E402
-from pathlib import Path  # noqa: E402
+import ast
+from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 def test_readme_python_example_runs(tmp_path):
     text = (ROOT / "README.md").read_text()
-    block = re.search(r"### From Python\n.*?```python\n(.*?)```", text, re.S).group(1)
+    block = re.search(r"### From Python\n.*?```python\n(.*?)```", text, re.DOTALL).group(1)
     env = {**os.environ, "DITHERLAB_STORE": str(tmp_path / "store"), "MPLBACKEND": "Agg"}
     out = subprocess.run([sys.executable, "-c", block], cwd=ROOT, env=env, capture_output=True,
                          text=True, timeout=900)

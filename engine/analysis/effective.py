@@ -53,12 +53,6 @@ def model_code(model: str) -> int:
         raise ValueError(f"model must be one of {tuple(MODELS)}, got {model!r}") from None
 
 
-def law_vector(p: np.ndarray) -> np.ndarray:
-    """``q = (fc, fs, vs, delta, sigma1_hat, vd, delta_d)`` from the parameter vector."""
-    return np.array([p[P.FC], p[P.FS], p[P.VS], p[P.DELTA], p[P.SIGMA1], p[P.VD],
-                     p[P.DELTA_D]], dtype=np.float64)
-
-
 @njit(cache=True, error_model="numpy")
 def force_and_slope(avg, v, sigma2, model):
     """``<F>`` and ``d<F>/dv`` at slow velocity ``v`` from the phase averages ``avg``."""
@@ -73,12 +67,12 @@ def force_and_slope(avg, v, sigma2, model):
 
 
 @njit(cache=True, error_model="numpy")
-def _kernel(v, W, vd, q, sigma2, rule, model, x, wx, side, F, dF):
+def _kernel(v, W, vd, p, sigma2, rule, model, x, wx, side, F, dF):
     avg = np.empty(N_AVG)
-    qi = q.copy()
+    pv = p.copy()   # the point's parameters: vd varies along the grid
     for i in range(v.size):
-        qi[5] = vd[i]
-        phase_average(avg, v[i], W[i], rule, x, wx, qi, side)
+        pv[P.VD] = vd[i]
+        phase_average(avg, v[i], W[i], rule, x, wx, pv, side)
         F[i], dF[i] = force_and_slope(avg, v[i], sigma2, model)
 
 
@@ -115,7 +109,7 @@ def effective_friction(v, W, p, *, dither="square-velocity", model="lugre", vd=N
     x, wx = gauss_legendre(n_quad)
     F, dF = np.empty(v.size), np.empty(v.size)
     _kernel(np.ascontiguousarray(v).ravel(), np.ascontiguousarray(W).ravel(),
-            np.ascontiguousarray(vd).ravel(), law_vector(p), float(p[P.SIGMA2]),
+            np.ascontiguousarray(vd).ravel(), np.array(p, dtype=np.float64), float(p[P.SIGMA2]),
             rule_code(dither), model_code(model), x, wx, float(side), F, dF)
     F, dF = F.reshape(v.shape), dF.reshape(v.shape)
     return (F, dF) if slope else F

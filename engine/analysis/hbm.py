@@ -33,26 +33,32 @@ import numpy as np
 
 from .. import params as P
 from .. import status as ST
+from ..friction.lugre import dz as bristle_rate
+from ..friction.lugre import make_force
 from ..friction.stribeck import g, sigma1
 from ..jit import njit
 
+_force = make_force(bristle_damping=True, viscous=True)
 
-@njit(cache=True)
-def _g(u, fc, fs, vs, delta):
+
+@njit(cache=True, error_model="numpy")
+def _g(u, p):
     """g(u) (Eq. 2.4) over an array."""
     out = np.empty(u.size)
     for i in range(u.size):
-        out[i] = g(u[i], fc, fs, vs, delta)
+        out[i] = g(u[i], p)
     return out
 
 
-@njit(cache=True)
-def _sigma1(u, s1hat, vd, delta_d):
-    """sigma1(u) (Eq. 2.5) over an array."""
-    out = np.empty(u.size)
+@njit(cache=True, error_model="numpy")
+def _friction_force(u, z, p):
+    """F = sigma0 z + sigma1(u) dz + sigma2 u with dz/dt of Eq. A.2 (the LuGre bristle
+    rate), over arrays of u and z."""
+    F = np.empty(u.size)
     for i in range(u.size):
-        out[i] = sigma1(u[i], s1hat, vd, delta_d)
-    return out
+        dz = bristle_rate(u[i], z[i], g(u[i], p), p[P.SIGMA0], 1.0)
+        F[i] = _force(z[i], dz, u[i], sigma1(u[i], p), p)
+    return F
 
 
 @dataclass(frozen=True)
@@ -109,7 +115,7 @@ def galerkin_terms(H, v_m, v_a, p):
     samples. For ``v_a <= v_m``, ``2 Re R_n`` are the paper's ``Q_n`` (Eq. A.4)."""
     M = max(8 * H, 256)
     u = v_m + v_a * np.cos(2 * np.pi * np.arange(M) / M)
-    gu = _g(u, p[P.FC], p[P.FS], p[P.VS], p[P.DELTA])
+    gu = _g(u, p)
     return (_coefficients(gu, 2 * H), _coefficients(p[P.SIGMA0] * np.abs(u), 2 * H),
             _coefficients(u * gu, H))
 
@@ -130,9 +136,7 @@ def _friction(c, H, v_m, v_a, omega, p, n_eval):
     z = np.fft.irfft(spec, n_eval)
     t = 2 * np.pi * np.arange(n_eval) / (n_eval * omega)
     u = v_m + v_a * np.cos(omega * t)
-    gu = _g(u, p[P.FC], p[P.FS], p[P.VS], p[P.DELTA])
-    dz = u - p[P.SIGMA0] * np.abs(u) * z / gu               # Eq. A.2
-    F = p[P.SIGMA0] * z + _sigma1(u, p[P.SIGMA1], p[P.VD], p[P.DELTA_D]) * dz + p[P.SIGMA2] * u
+    F = _friction_force(u, z, p)
     return t, u, z, F
 
 

@@ -11,8 +11,8 @@ Averaging the LuGre slider over one dither period (Sec. 5.1, Eqs. 5.6-5.10 and
 
 and, for the Jacobian of Eqs. 6.4-6.6, their derivatives in ``u`` (the average of a
 derivative is the derivative of the average: ``d<f>/dv = <f'>``). ``g`` and
-``sigma1`` are the laws of :mod:`engine.friction.stribeck` (Eqs. 2.4, 2.5); only their
-logarithmic derivatives are new here.
+``sigma1`` are the laws of :mod:`engine.friction.stribeck` (Eqs. 2.4, 2.5) on the same
+parameter vector ``p`` as the simulate path; only their logarithmic derivatives are new here.
 
 ``|u|`` and (for ``delta = 1``) ``g`` have a kink at ``u = 0``: the derivatives use
 ``sgn(0) = side`` (``+1`` the right derivative, ``-1`` the left one). This matters
@@ -21,6 +21,7 @@ only when a quadrature node sits exactly on ``u = 0`` -- the square wave at
 """
 from __future__ import annotations
 
+from .. import params as P
 from ..friction.stribeck import g, sigma1
 from ..jit import njit
 
@@ -47,19 +48,19 @@ def dlog_decay(u, scale, delta, side):
 
 
 @njit(cache=True, error_model="numpy")
-def dg(u, fc, fs, vs, delta, side):
+def dg(u, p, side):
     """Slope g'(u) of the Stribeck curve (Eq. 2.4), force per velocity."""
-    return (g(u, fc, fs, vs, delta) - fc) * dlog_decay(u, vs, delta, side)
+    return (g(u, p) - p[P.FC]) * dlog_decay(u, p[P.VS], p[P.DELTA], side)
 
 
 @njit(cache=True, error_model="numpy")
-def dsigma1(u, s1hat, vd, delta_d, side):
+def dsigma1(u, p, side):
     """Slope sigma1'(u) of the bristle damping (Eq. 2.5)."""
-    return sigma1(u, s1hat, vd, delta_d) * dlog_decay(u, vd, delta_d, side)
+    return sigma1(u, p) * dlog_decay(u, p[P.VD], p[P.DELTA_D], side)
 
 
 @njit(cache=True, error_model="numpy")
-def abc(u, fc, fs, vs, delta, s1hat, vd, delta_d, side):
+def abc(u, p, side):
     """The integrands a, b, c, s and slopes a', b', c', s' at one velocity ``u``.
 
     Returns
@@ -68,10 +69,10 @@ def abc(u, fc, fs, vs, delta, s1hat, vd, delta_d, side):
         ``(a, b, c, s, da, db, dc, ds)`` as defined in the module docstring.
         ``ds = g'(u) sgn(u)`` omits the Dirac jump of ``s`` at ``u = 0``.
     """
-    gu = g(u, fc, fs, vs, delta)
-    dgu = dg(u, fc, fs, vs, delta, side)
-    s1 = sigma1(u, s1hat, vd, delta_d)
-    ds1 = dsigma1(u, s1hat, vd, delta_d, side)
+    gu = g(u, p)
+    dgu = dg(u, p, side)
+    s1 = sigma1(u, p)
+    ds1 = dsigma1(u, p, side)
     su = sgn(u, side)
     au = abs(u)
     a = au / gu

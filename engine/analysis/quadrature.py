@@ -58,23 +58,23 @@ def gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 @njit(cache=True, error_model="numpy")
-def _add(out, u, w, q, side):
-    r = abc(u, q[0], q[1], q[2], q[3], q[4], q[5], q[6], side)
+def _add(out, u, w, p, side):
+    r = abc(u, p, side)
     for i in range(8):
         out[i] += w * r[i]
 
 
 @njit(cache=True, error_model="numpy")
-def _add_piece(out, v, W, lo, hi, x, wx, q, side):
+def _add_piece(out, v, W, lo, hi, x, wx, p, side):
     """Add (1/pi) int_lo^hi f(v + W cos phi) dphi by Gauss-Legendre."""
     half = 0.5 * (hi - lo)
     mid = 0.5 * (hi + lo)
     for k in range(x.size):
-        _add(out, v + W * np.cos(mid + half * x[k]), half * wx[k] / np.pi, q, side)
+        _add(out, v + W * np.cos(mid + half * x[k]), half * wx[k] / np.pi, p, side)
 
 
 @njit(cache=True, error_model="numpy")
-def phase_average(out, v, W, rule, x, wx, q, side):
+def phase_average(out, v, W, rule, x, wx, p, side):
     """Write the phase averages of a, b, c, s, a', b', c', s' into ``out[:8]``.
 
     Parameters
@@ -87,19 +87,20 @@ def phase_average(out, v, W, rule, x, wx, q, side):
         :data:`SQUARE` or :data:`SINE`.
     x, wx : (n,) float64
         Gauss-Legendre nodes/weights on [-1, 1] (sine rule only).
-    q : (7,) float64
-        ``fc, fs, vs, delta, sigma1_hat, vd, delta_d``.
+    p : (N_PARAMS,) float64
+        The parameter vector (engine.params); the laws read fc, fs, vs, delta, sigma1,
+        vd, delta_d from it.
     side : float
         sgn(0) for slopes at a kink, +1 or -1 (integrands module).
     """
     out[:] = 0.0
     Wa = abs(W)
     if rule == SQUARE:
-        _add(out, v + Wa, 0.5, q, side)
-        _add(out, v - Wa, 0.5, q, side)
+        _add(out, v + Wa, 0.5, p, side)
+        _add(out, v - Wa, 0.5, p, side)
     elif Wa > abs(v):
         phi0 = np.arccos(-v / Wa)  # u(phi0) = 0: the kink of |u|
-        _add_piece(out, v, Wa, 0.0, phi0, x, wx, q, side)
-        _add_piece(out, v, Wa, phi0, np.pi, x, wx, q, side)
+        _add_piece(out, v, Wa, 0.0, phi0, x, wx, p, side)
+        _add_piece(out, v, Wa, phi0, np.pi, x, wx, p, side)
     else:
-        _add_piece(out, v, Wa, 0.0, np.pi, x, wx, q, side)
+        _add_piece(out, v, Wa, 0.0, np.pi, x, wx, p, side)

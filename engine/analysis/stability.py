@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import params as P
 from ..jit import njit
-from .effective import LUGRE, force_and_slope, law_vector
+from .effective import LUGRE, force_and_slope
 from .quadrature import DA, DB, DC, N_AVG, N_QUAD, A, B, C, gauss_legendre, phase_average, rule_code
 
 
@@ -52,12 +52,12 @@ def _fill_jacobian(J, avg, v, sigma0, sigma2):
 
 
 @njit(cache=True, error_model="numpy")
-def _kernel(v_ref, W, vd, q, sigma0, sigma2, rule, x, wx, side, J, F):
+def _kernel(v_ref, W, vd, p, sigma0, sigma2, rule, x, wx, side, J, F):
     avg = np.empty(N_AVG)
-    qi = q.copy()
+    pv = p.copy()   # the point's parameters: vd varies along the grid
     for i in range(v_ref.size):
-        qi[5] = vd[i]
-        phase_average(avg, v_ref[i], W[i], rule, x, wx, qi, side)
+        pv[P.VD] = vd[i]
+        phase_average(avg, v_ref[i], W[i], rule, x, wx, pv, side)
         _fill_jacobian(J[i], avg, v_ref[i], sigma0, sigma2)
         F[i] = force_and_slope(avg, v_ref[i], sigma2, LUGRE)[0]
 
@@ -90,7 +90,7 @@ def jacobian(v_ref, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, s
     shape, (v, w, d) = _flat(v_ref, W, p[P.VD] if vd is None else vd)
     x, wx = gauss_legendre(n_quad)
     J, F = np.empty((v.size, 3, 3)), np.empty(v.size)
-    _kernel(v, w, d, law_vector(p), float(p[P.SIGMA0]), float(p[P.SIGMA2]),
+    _kernel(v, w, d, np.array(p, dtype=np.float64), float(p[P.SIGMA0]), float(p[P.SIGMA2]),
             rule_code(dither), x, wx, float(side), J, F)
     return J.reshape(shape + (3, 3)), F.reshape(shape)
 
@@ -120,11 +120,11 @@ def averages(v, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, side=
     """Phase averages ``(A, B, C, S, A', B', C', S')`` at ``(v, W)``, shape ``(*s, 8)``."""
     shape, (v, w, d) = _flat(v, W, p[P.VD] if vd is None else vd)
     x, wx = gauss_legendre(n_quad)
-    q, rule = law_vector(p), rule_code(dither)
+    pv, rule = np.array(p, dtype=np.float64), rule_code(dither)
     out = np.empty((v.size, N_AVG))
     for i in range(v.size):
-        q[5] = d[i]
-        phase_average(out[i], v[i], w[i], rule, x, wx, q, float(side))
+        pv[P.VD] = d[i]
+        phase_average(out[i], v[i], w[i], rule, x, wx, pv, float(side))
     return out.reshape(shape + (N_AVG,))
 
 

@@ -1,6 +1,6 @@
 """Single-state elasto-plastic friction (Dupont et al.), Eqs. 2.3, 2.6, 2.7.
 
-    dz/dt = u - alpha(z, u) sigma0 |u| z / g(u),     F as in LuGre
+    dz/dt = u - alpha(z, u) sigma0 |u| z / g(u),     F as in LuGre (engine.friction.lugre)
 
 with z_ss(u) = g(u) / sigma0, z_ba = lam * z_ss(u) and
 
@@ -8,7 +8,7 @@ with z_ss(u) = g(u) / sigma0, z_ba = lam * z_ss(u) and
     alpha = 1                         if |z| >= z_ss                       (sliding)
     alpha = 0.5 sin(pi (|z| - (z_ss + z_ba)/2) / (z_ss - z_ba)) + 0.5      (pre-sliding)
 
-Eq. 2.7 is printed with z; DESIGN.md §1 fixes it to |z| so that the law is odd.
+Eq. 2.7 is printed with z; it is read with |z| so that the law is odd (docs/MODEL.md).
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ PRESLIDE = 1
 SLIDE = 2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def alpha(z, u, gu, sigma0, lam):
     """Elasto-plastic function alpha(z, u) in [0, 1], given g(u)."""
     if u == 0.0 or z == 0.0 or (u > 0.0) != (z > 0.0):
@@ -36,7 +36,7 @@ def alpha(z, u, gu, sigma0, lam):
     return 0.5 * np.sin(np.pi * (az - 0.5 * (zss + zba)) / (zss - zba)) + 0.5
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def phase(a):
     """STICK (alpha == 0), PRESLIDE (0 < alpha < 1) or SLIDE (alpha == 1)."""
     if a == 0.0:
@@ -44,9 +44,3 @@ def phase(a):
     if a == 1.0:
         return SLIDE
     return PRESLIDE
-
-
-@njit(cache=True)
-def dz(u, z, gu, sigma0, lam):
-    """Elasto-plastic bristle rate dz/dt."""
-    return u - alpha(z, u, gu, sigma0, lam) * sigma0 * abs(u) * z / gu

@@ -7,8 +7,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import NamedTuple
 
+from ..friction.laws import STATIC_LAWS
 from . import contact, slider
-from .laws import STATIC_LAWS
 
 MODULES = {"slider": slider, "contact": contact}
 

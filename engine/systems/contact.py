@@ -3,7 +3,7 @@
     u(t) = v_m + v_a cos(omega t)       (sine-velocity; on the cube v_ref plays v_m, W plays v_a)
     u(t) = v_m + v_a sq(omega t)        (square-velocity)
     u(t) = v_m                          (none)
-    dz/dt = law(u, z)                   (engine.systems.laws), state y = (z,)
+    dz/dt = law(u, z)                   (engine.friction.laws), state y = (z,)
 
 Parameters are dimensional SI (engine.params.CONTACT_DEFAULTS). ``sine-force`` has no
 meaning without a mass and is refused. Quadrature states follow ``z`` when needed:
@@ -19,8 +19,8 @@ import numpy as np
 
 from .. import params as P
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
+from ..friction.laws import STATIC_LAWS, make_kinks, make_law
 from ..jit import njit
-from .laws import STATIC_LAWS, make_kinks, make_law
 
 Z = 0
 N_BASE = 1

@@ -4,7 +4,7 @@ State ``y = (e, v, z)`` (indices :data:`E`, :data:`V`, :data:`Z`), ``e`` the spr
 
     de/dtau = v_ref - v
     dv/dtau = e - F(u, z) + f_slow(tau) + f_dither(tau)
-    dz/dtau = law(u, z)                                   (engine.systems.laws)
+    dz/dtau = law(u, z)                                   (engine.friction.laws)
 
     f_slow = A_s sin(Omega_s tau)                  (scene.slow_force)
     square-velocity:  u = v + W sq,  sq = sign(sin(omega tau)) supplied by the integrator
@@ -25,8 +25,8 @@ import numpy as np
 
 from .. import params as P
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
+from ..friction.laws import make_kinks, make_law
 from ..jit import njit
-from .laws import make_kinks, make_law
 
 E, V, Z = 0, 1, 2
 N_BASE = 3

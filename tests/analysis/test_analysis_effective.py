@@ -10,7 +10,6 @@ from engine.analysis.effective import (
     sine_force_simplified,
 )
 from engine.analysis.integrands import dsigma1
-from engine.friction.stribeck import g
 
 PAPER = P.pack()                       # Sec. 5.1 set, vd = 0.1
 FC, FS, VS, S1, S2 = 1.0, 1.5, 0.1, 10.0, 0.004
@@ -56,7 +55,7 @@ def test_eq_5_12_exact_slope_and_the_eq_5_13_approximation(W):
     """Eq. 5.12's slope at v = 0 is exactly g(W)/W + sigma2 (Y ~ 2v / (2W/g(W)));
     Eq. 5.13 prints (fc + W sigma2)/W, short by (fs - fc) exp(-(W/vs)^2) / W."""
     slope = _fd_slope(lambda v: effective_friction(v, W, PAPER, model="no-damping"), 0.0)
-    exact = g(W, FC, FS, VS, 2.0) / W + S2
+    exact = _g(W) / W + S2
     assert slope == pytest.approx(exact, rel=1e-8)
     eq_5_13 = (FC + W * S2) / W
     assert exact - eq_5_13 == pytest.approx((FS - FC) * np.exp(-(W / VS) ** 2) / W, rel=1e-9)
@@ -92,7 +91,7 @@ def test_lugre_square_low_velocity_slope(vd):
     g(W)/W (1 - C) + B' + sigma2 = g(W)/W + sigma1'(W) W + sigma2."""
     W = 0.5
     _F, dF = effective_friction(0.0, W, P.pack(vd=vd), slope=True)
-    expected = g(W, FC, FS, VS, 2.0) / W + dsigma1(W, S1, vd, 2.0, 1.0) * W + S2
+    expected = _g(W) / W + dsigma1(W, P.pack(vd=vd), 1.0) * W + S2
     assert dF == pytest.approx(expected, rel=1e-12)
     assert _fd_slope(lambda v: effective_friction(v, W, P.pack(vd=vd)), 0.0) == pytest.approx(expected, rel=1e-7)
 

@@ -6,7 +6,6 @@ import pytest
 from scipy.integrate import quad
 
 from engine import params as P
-from engine.analysis.effective import law_vector
 from engine.analysis.quadrature import (
     N_AVG,
     SINE,
@@ -18,22 +17,20 @@ from engine.analysis.quadrature import (
     gauss_legendre,
     phase_average,
 )
-from engine.friction.stribeck import g, sigma1
 
 PAPER = P.pack()
 
 
 def _avg(v, W, rule, n=64, vd=0.1, side=1.0):
-    q = law_vector(P.pack(vd=vd))
     x, wx = gauss_legendre(n)
     out = np.empty(N_AVG)
-    phase_average(out, v, W, rule, x, wx, q, side)
+    phase_average(out, v, W, rule, x, wx, P.pack(vd=vd), side)
     return out
 
 
 def _integrands(u, vd):
-    gu = g(u, 1.0, 1.5, 0.1, 2.0)
-    s1 = sigma1(u, 10.0, vd, 2.0)
+    gu = 1.0 + 0.5 * np.exp(-(u / 0.1) ** 2)   # Eqs. 2.4, 2.5 with the Sec. 5.1 set
+    s1 = 10.0 * np.exp(-(u / vd) ** 2)
     return np.array([abs(u) / gu, s1 * u, s1 * abs(u) / gu])
 
 
@@ -75,7 +72,7 @@ def test_sine_rule_converges_spectrally(W, vd):
 def test_static_value_takes_the_middle_of_the_jump_at_u_zero():
     """Eq. 5.14's Sgn(0) = 0: at v = W one square-wave point sits on u = 0."""
     W = 0.5
-    expected = 0.5 * g(2 * W, 1.0, 1.5, 0.1, 2.0)
+    expected = 0.5 * (1.0 + 0.5 * np.exp(-((2 * W) / 0.1) ** 2))   # g(2W) / 2, Eq. 2.4
     assert _avg(W, W, SQUARE)[S] == pytest.approx(expected, rel=1e-15)
 
 

@@ -1,7 +1,7 @@
 """Invariants with exact references (STYLE.md "Invariants"; DESIGN.md §1).
 
 - LuGre at constant velocity (contact system, Sec. 3, W = 0): z(t) equals the closed-form
-  relaxation ``engine.friction.lugre.relax`` (the z equation is linear for frozen u), and
+  relaxation :func:`_relax` (the z equation is linear for frozen u), and
   F_mean equals the time average of F = sigma0 z + sigma1(u) dz + sigma2 u along it.
 - LuGre keeps |z| <= fs / sigma0 (the invariant set of Eq. 2.3 with alpha = 1) under square
   dither, for the slider and the contact.
@@ -15,9 +15,17 @@ from scipy.integrate import quad
 from engine import params as P
 from engine.api import simulate
 from engine.dither import switch_times
-from engine.friction import lugre, stribeck
 from engine.settings import Settings
+from tests.engine import reference as R
 from tests.engine.common import scene
+
+
+def _relax(z0, u, t, d):
+    """Closed-form z(t) of dz = u - sigma0 |u| z / g(u) at constant u (Eq. 2.3, alpha = 1):
+    z_ss + (z0 - z_ss) exp(-k t), z_ss = g(u) sgn(u) / sigma0, k = sigma0 |u| / g(u)."""
+    gu = R.g(u, d)
+    zss = gu * np.sign(u) / d["sigma0"]
+    return zss + (z0 - zss) * np.exp(-d["sigma0"] * abs(u) / gu * t)
 
 
 @pytest.mark.parametrize("u", [1e-3, -2.5e-3])
@@ -28,15 +36,14 @@ def test_contact_lugre_constant_velocity_matches_relaxation(u):
     r = simulate(scene(system="contact", dither="none", outputs=("F_mean",)), p,
                  Settings(rtol=1e-10, atol=1e-16), record=True)
     assert r.status == 0
-    args = (c["fc"], c["fs"], c["vs"], c["delta"], c["sigma0"])
-    z_exact = np.array([lugre.relax(2e-6, u, t, *args) for t in r.t])
+    z_exact = np.array([_relax(2e-6, u, t, c) for t in r.t])
     assert np.max(np.abs(r.y[:, 0] - z_exact)) <= 1e-9 * c["fs"] / c["sigma0"]
-    s1 = stribeck.sigma1(u, c["sigma1"], c["vd"], c["delta_d"])
-    gu = stribeck.g(u, c["fc"], c["fs"], c["vs"], c["delta"])
+    s1, gu = R.sigma1(u, c), R.g(u, c)
 
     def force(t):
-        z = lugre.relax(2e-6, u, t, *args)
-        return c["sigma0"] * z + s1 * lugre.dz(u, z, gu, c["sigma0"]) + c["sigma2"] * u
+        z = _relax(2e-6, u, t, c)
+        dz = u - c["sigma0"] * abs(u) * z / gu
+        return c["sigma0"] * z + s1 * dz + c["sigma2"] * u
     f_mean = quad(force, 0.0, t_end, epsabs=1e-14, epsrel=1e-12)[0] / t_end
     assert abs(r.outputs["F_mean"] - f_mean) <= 1e-8 * c["fs"]
 

@@ -16,7 +16,6 @@ import pytest
 
 from engine import params as P
 from engine.api import simulate
-from engine.friction import lugre
 from engine.settings import Settings
 from tests.engine import reference as R
 from tests.engine.common import scene
@@ -26,7 +25,7 @@ T_END, V_REF, SIGMA0, SIGMA1, KICK = 10.0, 1.0, 10.0, 1.0, 0.3
 
 
 def _smooth_problem():
-    zss = lugre.steady_state(V_REF, 1.0, 1.5, 0.1, 2.0, SIGMA0)
+    zss = R.g(V_REF, P.PAPER_DEFAULTS) / SIGMA0   # z_ss = g(v) sgn(v) / sigma0, v > 0
     y0 = (SIGMA0 * zss + 0.004 * V_REF + KICK, V_REF, zss)
     p = P.pack(v_ref=V_REF, W=0.0, omega=1.0, t_end=T_END, sigma0=SIGMA0, sigma1=SIGMA1,
                e0=y0[0], v0=y0[1], z0=y0[2])

@@ -13,7 +13,6 @@ import pytest
 from engine import params as P
 from engine import status as S
 from engine.api import simulate
-from engine.friction import stribeck
 from engine.settings import Settings
 from tests.engine import reference as R
 from tests.engine.common import scene
@@ -23,7 +22,7 @@ U = 1e-3
 
 def _t_ba():
     c = P.CONTACT_DEFAULTS
-    return c["lam"] * stribeck.g(U, c["fc"], c["fs"], c["vs"], c["delta"]) / (c["sigma0"] * U)
+    return c["lam"] * R.g(U, c) / (c["sigma0"] * U)
 
 
 @pytest.mark.parametrize("t_tr,long_stick", [(0.0, 5e-3), (5e-3, 1e-3), (0.0, 0.012)])

@@ -90,13 +90,13 @@ def test_axes_ranges_and_defaults():
 
 # --- issue 10: validation that cannot be fooled, made slow or crashed -------------------
 
-import json  # noqa: E402
-import math  # noqa: E402
-import time  # noqa: E402
-import tracemalloc  # noqa: E402
-import warnings  # noqa: E402
+import json
+import math
+import time
+import tracemalloc
+import warnings
 
-from sweeps.spec import MAX_LINE, SpecWarning  # noqa: E402
+from sweeps.spec import MAX_LINE, SpecWarning
 
 NUMERIC_FIELDS = [  # every float of a spec, as a path, with a valid value
     ("params", "sigma0"), ("params", "sigma1"), ("params", "sigma2"), ("params", "vs"),

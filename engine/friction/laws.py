@@ -1,4 +1,4 @@
-"""Friction laws as compile-time specialised njit closures, shared by both systems.
+"""The friction laws as compile-time specialised njit closures, shared by both systems.
 
 ``make_law(scene) -> law(u, z, hold, p) -> (dz, F, alpha)``
 
@@ -6,7 +6,7 @@
   ``F = sigma0 z + sigma1(u) dz + sigma2 u``. ``alpha`` is reported as 0 when
   ``|u| < p[STICK_BAND]`` (LuGre has no stick phase of its own; this is the
   stick indicator of the observables) and 1 otherwise.
-- ``elastoplastic`` (Eqs. 2.3, 2.6, 2.7 with |z|, DESIGN.md §1): ``dz = u - alpha sigma0 |u| z / g``.
+- ``elastoplastic`` (Eqs. 2.3, 2.6, 2.7 with |z|, docs/MODEL.md): ``dz = u - alpha sigma0 |u| z / g``.
 - ``stribeck`` / ``coulomb`` (Eq. 2.2, static): while sliding, ``F = g(u) sgn(u) + sigma2 u``
   (coulomb: ``g = fc``). **Stick law (Karnopp band)**: when ``|u| < p[STICK_BAND]`` the
   friction is the force that holds ``u`` still, ``hold`` (given by the system, e.g.
@@ -17,41 +17,18 @@
 
 Effect flags of the Scene fold at compile time: ``stribeck=False`` uses ``g = fc``
 without an exp, ``bristle_damping=False`` drops ``sigma1(u)``, ``viscous=False``
-drops ``sigma2 u``.
+drops ``sigma2 u``. The pieces (g, sigma1, the bristle rate, alpha, the force) are the
+functions of :mod:`.stribeck`, :mod:`.lugre` and :mod:`.elastoplastic`, which the averaged
+and harmonic-balance paths call too.
 """
 from __future__ import annotations
 
 from .. import params as P
-from ..friction.elastoplastic import alpha as ep_alpha
-from ..friction.stribeck import _decay
 from ..jit import njit
-
-
-def make_g(stribeck: bool):
-    """njit ``g(u, p)``, Eq. 2.4 (``fc`` alone when the scene has no Stribeck effect)."""
-    if stribeck:
-        @njit(inline="always", error_model="numpy")
-        def g(u, p):
-            return p[P.FC] + (p[P.FS] - p[P.FC]) * _decay(u / p[P.VS], p[P.DELTA])
-    else:
-        @njit(inline="always", error_model="numpy")
-        def g(u, p):
-            return p[P.FC]
-    return g
-
-
-def make_damping(bristle_damping: bool):
-    """njit ``sigma1(u, p)``, Eq. 2.5 (0 when the scene has no bristle damping)."""
-    if bristle_damping:
-        @njit(inline="always", error_model="numpy")
-        def sigma1(u, p):
-            return p[P.SIGMA1] * _decay(u / p[P.VD], p[P.DELTA_D])
-    else:
-        @njit(inline="always", error_model="numpy")
-        def sigma1(u, p):
-            return 0.0
-    return sigma1
-
+from .elastoplastic import alpha as ep_alpha
+from .lugre import dz as bristle_rate
+from .lugre import make_force
+from .stribeck import make_g, make_sigma1
 
 STATIC_LAWS = ("coulomb", "stribeck")   # no bristle state; a Karnopp band, whose edges are jumps
 
@@ -65,9 +42,8 @@ def make_law(scene):
 
 def _bristle_law(scene):
     g = make_g(scene.stribeck)
-    sigma1 = make_damping(scene.bristle_damping)
-    viscous = scene.viscous
-    damping = scene.bristle_damping
+    sigma1 = make_sigma1(scene.bristle_damping)
+    force = make_force(scene.bristle_damping, scene.viscous)
     elasto = scene.friction == "elastoplastic"
 
     @njit(inline="always", error_model="numpy")
@@ -76,16 +52,11 @@ def _bristle_law(scene):
         gu = g(u, p)
         if elasto:
             a = ep_alpha(z, u, gu, sigma0, p[P.LAM])
-            dz = u - a * sigma0 * abs(u) * z / gu
+            dz = bristle_rate(u, z, gu, sigma0, a)
         else:
-            a = 0.0 if abs(u) < p[P.STICK_BAND] else 1.0
-            dz = u - sigma0 * abs(u) * z / gu
-        F = sigma0 * z
-        if damping:
-            F += sigma1(u, p) * dz
-        if viscous:
-            F += p[P.SIGMA2] * u
-        return dz, F, a
+            a = 0.0 if abs(u) < p[P.STICK_BAND] else 1.0   # the stick indicator only
+            dz = bristle_rate(u, z, gu, sigma0, 1.0)
+        return dz, force(z, dz, u, sigma1(u, p), p), a
     return law
 
 
