@@ -13,8 +13,8 @@ import numpy as np
 
 from . import params as P
 from .integrators.problem import CTR_EVALS, CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS
-from .kernels import point_kernel, settings_to_cfg
-from .scene import ANALYSIS_METHODS, Scene
+from .kernels import make_config, point_kernel
+from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
 
 
@@ -56,7 +56,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
 
     Parameters
     ----------
-    scene : compile-time choices (``scene.method`` must be an integrator).
+    scene : compile-time choices (``scene.path`` must be ``"simulate"``).
     p : parameter vector (``engine.params.pack``) or a dict of overrides of the paper set.
     settings : tolerances / steps (default ``Settings()``).
     record : keep ``(t, y)`` of every ``record_every``-th accepted step, at most
@@ -65,8 +65,8 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
         ``j * record_dt`` in ``[record_from, t_end]``, interpolated by the method's
         continuous extension (order 4 for dopri5 and rodas4, 3 for rk4); implies ``record``.
     """
-    if scene.method in ANALYSIS_METHODS:
-        raise ValueError(f"scene.method: simulate() integrates in time; {scene.method!r} is "
+    if scene.path in ANALYSIS_PATHS:
+        raise ValueError(f"scene.path: simulate() integrates in time; {scene.path!r} is "
                          "an analysis path, use engine.batch.run_block")
     p = P.pack(**p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
     if record_every < 1:
@@ -76,7 +76,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     sampled = record_dt is not None
     record = record or sampled
     pk = point_kernel(scene, sampled_record=sampled)
-    cfg = settings_to_cfg(settings or Settings(), record_every, record_dt or 0.0, record_from)
+    cfg = make_config(settings or Settings(), record_every, record_dt or 0.0, record_from)
     y, obs = np.empty(pk.n), np.empty(pk.obs_size)
     out = np.empty(pk.n_out)
     ctr = np.zeros(CTR_SIZE, dtype=np.int64)

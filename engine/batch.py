@@ -13,9 +13,9 @@ import numpy as np
 
 from . import params as P
 from . import status as S
-from .kernels import block_kernel, point_kernel, settings_to_cfg
+from .kernels import block_kernel, make_config, point_kernel
 from .observables import N_HIST
-from .scene import ANALYSIS_METHODS, Scene
+from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
 
 POINT_AXES = ("W", "omega", "v_ref", "vd")
@@ -48,8 +48,8 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
 
     Parameters
     ----------
-    scene : compile-time choices; ``scene.method`` an integrator of
-        ``engine.integrators.METHODS`` or ``"averaged"`` / ``"hbm"`` (engine.analysis).
+    scene : compile-time choices; ``scene.path`` ``"simulate"`` (with ``scene.integrator``
+        of ``engine.integrators.METHODS``) or ``"averaged"`` / ``"hbm"`` (engine.analysis).
     points : float64 ``(n, 4)``; column j overrides ``p[W]``, ``p[OMEGA]``, ``p[V_REF]``, ``p[VD]``.
     p : the parameter vector (``engine.params.pack``), shape ``(N_PARAMS,)``.
     settings : run-time numerics (defaults: ``Settings()``).
@@ -57,7 +57,7 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
     points = np.ascontiguousarray(points, dtype=np.float64)
     p = np.ascontiguousarray(p, dtype=np.float64)
     _check(scene, points, p)
-    if scene.method in ANALYSIS_METHODS:
+    if scene.path in ANALYSIS_PATHS:
         return _analysis(scene, points, p)
     settings = settings or Settings()
     m = points.shape[0]
@@ -68,7 +68,7 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
     counters = np.zeros((m, 3), dtype=np.int64)
     kernel = block_kernel(scene)
     t0 = time.perf_counter()
-    kernel(points, p, settings_to_cfg(settings), out, status, counters)
+    kernel(points, p, make_config(settings), out, status, counters)
     wall = time.perf_counter() - t0
     evals = counters[:, 2]
     share = evals / evals.sum() if evals.sum() > 0 else np.full(m, 1.0 / max(m, 1))

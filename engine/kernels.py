@@ -20,17 +20,7 @@ from . import status as S
 from .integrators import METHODS
 from .integrators.driver import make_solve
 from .integrators.problem import (
-    CFG_ATOL,
-    CFG_ATOL_I,
-    CFG_ATOL_NATURAL,
-    CFG_H_FREE,
-    CFG_MAX_STEPS,
-    CFG_RECORD_EVERY,
-    CFG_RTOL,
-    CFG_SAMPLE_DT,
-    CFG_SAMPLE_T0,
-    CFG_SIZE,
-    CFG_STEPS_PER_PERIOD,
+    CONFIG,
     CTR_SIZE,
     N_ATOL,
     Problem,
@@ -53,29 +43,31 @@ class PointKernel(NamedTuple):
     run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
 
 
-def settings_to_cfg(settings: Settings, record_every: int = 1, sample_dt: float = 0.0,
-                    sample_t0: float = 0.0) -> np.ndarray:
-    """Pack :class:`Settings` (and the API's recording choices) into the float64 ``cfg``
-    array of the kernels."""
-    cfg = np.zeros(CFG_SIZE)
-    cfg[CFG_SAMPLE_DT], cfg[CFG_SAMPLE_T0] = sample_dt, sample_t0
-    cfg[CFG_RTOL], cfg[CFG_ATOL] = settings.rtol, settings.atol
-    cfg[CFG_ATOL_NATURAL] = settings.atol_units == "natural"
-    cfg[CFG_ATOL_I:CFG_ATOL_I + N_ATOL] = settings.atol      # absolute; natural: per point
-    cfg[CFG_MAX_STEPS] = settings.max_steps
-    cfg[CFG_STEPS_PER_PERIOD] = settings.steps_per_period
-    cfg[CFG_H_FREE] = settings.h
-    cfg[CFG_RECORD_EVERY] = record_every
+def make_config(settings: Settings, record_every: int = 1, sample_dt: float = 0.0,
+                sample_t0: float = 0.0) -> np.ndarray:
+    """:class:`Settings` (and the API's recording choices) as the kernels' settings record:
+    a one-element array of :data:`engine.integrators.problem.CONFIG` (the kernels read
+    ``cfg[0]``; the driver writes the per-point fields into it)."""
+    cfg = np.zeros(1, CONFIG)
+    c = cfg[0]
+    c["rtol"], c["atol"] = settings.rtol, settings.atol
+    c["atol_natural"] = settings.atol_units == "natural"
+    c["atol_i"] = settings.atol      # absolute; natural: scaled per point
+    c["max_steps"] = settings.max_steps
+    c["steps_per_period"] = settings.steps_per_period
+    c["h_free"] = settings.h
+    c["record_every"] = record_every
+    c["sample_dt"], c["sample_t0"] = sample_dt, sample_t0
     return cfg
 
 
 def method_module(scene):
-    """The integrator module of ``scene.method`` (ValueError naming the known ones)."""
+    """The integrator module of ``scene.integrator`` (ValueError naming the known ones)."""
     try:
-        return METHODS[scene.method]
+        return METHODS[scene.integrator]
     except KeyError:
-        raise ValueError(f"method: unknown integrator {scene.method!r}; "
-                         f"known: {sorted(METHODS)} (or 'averaged', 'hbm')") from None
+        raise ValueError(f"integrator: unknown integrator {scene.integrator!r}; "
+                         f"known: {sorted(METHODS)}") from None
 
 
 @njit(error_model="numpy", refcount=False)
@@ -88,8 +80,8 @@ def _record_instant(t, y, p, sq, obs, ctr, rec):
 def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``.
 
-    ``sampled_record``: ``rec`` receives the state at the instants ``k cfg[CFG_SAMPLE_DT]``
-    (dense output, no stops) instead of every ``cfg[CFG_RECORD_EVERY]``-th step end.
+    ``sampled_record``: ``rec`` receives the state at the instants ``k cfg.sample_dt``
+    (dense output, no stops) instead of every ``cfg.record_every``-th step end.
     """
     system = make_system(scene)
     observer = make_observer(scene, system)
@@ -103,17 +95,21 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     solve = make_solve(stepper, observer, scene.dither)
     init, obs_init, finish, scales = system.init, observer.init, observer.finish, system.scales
     n_err = system.n_err
+    if n_err > N_ATOL:
+        raise ValueError(f"{scene.system}: {n_err} controlled components, room for {N_ATOL}")
 
     @njit(error_model="numpy")
     def run_point(p, cfg, work, y, obs, out, ctr, rec):
+        c = cfg[0]
         init(p, y)
-        if cfg[CFG_ATOL_NATURAL] != 0.0:
-            scales(p, cfg[CFG_ATOL_I:CFG_ATOL_I + n_err])
+        if c.atol_natural:
+            atol = c.atol_i[:n_err]
+            scales(p, atol)
             for i in range(n_err):
-                cfg[CFG_ATOL_I + i] *= cfg[CFG_ATOL]
+                atol[i] *= c.atol
         obs_init(obs)
         ctr[:] = 0
-        status = solve(work, y, p, cfg, obs, ctr, rec)
+        status = solve(work, y, p, c, obs, ctr, rec)
         if status != S.OK:
             out[:] = np.nan
             return status

@@ -12,15 +12,25 @@ from .dither import KINDS as DITHER_KINDS
 from .friction import LAWS
 
 SYSTEMS = ("slider", "contact")
-ANALYSIS_METHODS = ("averaged", "hbm")
+PATHS = ("simulate", "averaged", "hbm")   # how a point is answered (a spec's ``method``)
+ANALYSIS_PATHS = ("averaged", "hbm")      # no time integration
 
 
 @dataclass(frozen=True)
 class Scene:
+    """The problem (system, friction, dither, effects, observables), the path that answers it
+    and, on the simulate path, the time integrator.
+
+    ``path`` -- ``"simulate"`` (time integration), ``"averaged"`` or ``"hbm"`` (engine.analysis);
+    a sweep spec calls it ``method``. ``integrator`` -- a name of
+    :data:`engine.integrators.METHODS`; off the simulate path it is cleared to ``""``.
+    """
+
     system: str = "slider"
     friction: str = "lugre"
     dither: str = "square-velocity"
-    method: str = "dopri5"
+    path: str = "simulate"
+    integrator: str = "dopri5"
     stribeck: bool = True
     bristle_damping: bool = True
     viscous: bool = True
@@ -34,22 +44,21 @@ class Scene:
             raise ValueError(f"friction must be one of {LAWS}, got {self.friction!r}")
         if self.dither not in DITHER_KINDS:
             raise ValueError(f"dither must be one of {DITHER_KINDS}, got {self.dither!r}")
-
-    @property
-    def path(self) -> str:
-        """'simulate', 'averaged' or 'hbm'."""
-        return self.method if self.method in ANALYSIS_METHODS else "simulate"
+        if self.path not in PATHS:
+            raise ValueError(f"path must be one of {PATHS}, got {self.path!r}")
+        if self.path != "simulate" and self.integrator:
+            object.__setattr__(self, "integrator", "")   # one Scene per analysis problem
 
     @classmethod
     def from_params(cls, p, *, system="slider", friction="lugre", dither="square-velocity",
-                    method="dopri5", outputs=(), grid_vd=None) -> Scene:
+                    path="simulate", integrator="dopri5", outputs=(), grid_vd=None) -> Scene:
         """Scene whose effect flags are off exactly where ``p`` makes them vanish.
 
         ``grid_vd`` -- the swept vd values, if any (bristle damping matters when
         sigma1_hat != 0 whatever vd is; vd only scales it).
         """
         return cls(
-            system=system, friction=friction, dither=dither, method=method,
+            system=system, friction=friction, dither=dither, path=path, integrator=integrator,
             stribeck=bool(p[P.FS] != p[P.FC]),
             bristle_damping=bool(p[P.SIGMA1] != 0.0),
             viscous=bool(p[P.SIGMA2] != 0.0),

@@ -3,7 +3,7 @@
 Run: ``.venv/bin/python scripts/bench_engine.py [--quick] [--no-scipy] [--scipy-cap S]``
 
 The machine is shared and noisy, so absolute times (thread CPU time, median of repeats) are
-only printed for context; what counts is the ratio to the C reference ``/work/shared/anchors/anchor.c``
+only printed for context; what counts is the ratio to the C reference ``../shared/anchors/anchor.c``
 (see its README) compiled here at run time (``gcc -O3 -march=native``, into the
 gitignored ``scripts/_build/``) and timed in the same process through ctypes,
 interleaved with the engine runs (paired A/B timing, median of repeats).
@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import ctypes
 import math
+import os
 import pathlib
 import subprocess
 import sys
@@ -42,7 +43,7 @@ import numpy as np
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-ANCHOR_DIR = pathlib.Path("/work/shared/anchors")
+ANCHOR_DIR = ROOT.parent / "shared" / "anchors"   # beside the checkout, never copied in
 BUILD = ROOT / "scripts" / "_build"
 
 # anchors/README.md: paper parameters of both scenes
@@ -50,6 +51,7 @@ SIGMA0, FC, V_REF, OMEGA, T_END, T_WIN = 100.0, 1.0, 0.4, 1000.0, 100.0, 50.0
 SCENES = {"fig10": 0.4, "nodither": 0.0}          # scene -> W
 ACCURACIES = (1e-4, 1e-7)
 C_METHOD = {"rk4": 0, "dp5": 1, "rhs": 2, "dp5dense": 3}
+C_FLAGS = ("-O3", "-march=native")   # gcc's default -ffp-contract=fast: FMA where it pays
 
 
 # --------------------------------------------------------------------------- reference
@@ -80,10 +82,10 @@ class Anchor:
         BUILD.mkdir(parents=True, exist_ok=True)
         src = ANCHOR_DIR / "anchor.c"
         lib = BUILD / "libanchor.so"
+        self.cmd = ["gcc", *C_FLAGS, "-DANCHOR_LIB", "-shared", "-fPIC",
+                    "-o", str(lib), str(src), "-lm"]
         if not lib.exists() or lib.stat().st_mtime < src.stat().st_mtime:
-            cmd = ["gcc", "-O3", "-march=native", "-DANCHOR_LIB", "-shared", "-fPIC",
-                   "-o", str(lib), str(src), "-lm"]
-            subprocess.run(cmd, check=True)
+            subprocess.run(self.cmd, check=True)
         self.lib = ctypes.CDLL(str(lib))
         self.lib.anchor_run.argtypes = [ctypes.c_int, ctypes.c_double, ctypes.c_double,
                                         ctypes.c_double, ctypes.c_double,
@@ -97,6 +99,21 @@ class Anchor:
         self.lib.anchor_run(C_METHOD[method], W, V_REF, OMEGA, float(arg), self._ptr)
         o = self.out
         return o[:5].copy(), int(o[5]), int(o[6]), int(o[7])
+
+
+def print_machine(anchor: Anchor) -> None:
+    """The CPU and both compilers with their flags: ratios differ between CPUs."""
+    import llvmlite.binding as llvm
+    import numba
+    model = next((line.split(":", 1)[1].strip() for line in
+                  pathlib.Path("/proc/cpuinfo").read_text().splitlines()
+                  if line.startswith("model name")), "unknown CPU")
+    gcc = subprocess.run(["gcc", "--version"], capture_output=True, text=True).stdout
+    print(f"CPU: {model} ({len(os.sched_getaffinity(0))} cores usable)")
+    print(f"C: {gcc.splitlines()[0]}; flags {' '.join(C_FLAGS)} (anchor.c, as the README's)")
+    print(f"numba {numba.__version__} (LLVM {'.'.join(map(str, llvm.llvm_version_info))}), "
+          f"target {llvm.get_host_cpu_name()}; njit(error_model='numpy'); DP5 stage sums "
+          "with fastmath={'contract'} (FMA), everything else strict IEEE")
 
 
 # --------------------------------------------------------------------------- timing
@@ -210,7 +227,7 @@ class EngineQoI:
         from engine.scene import Scene
         from engine.systems import make_system
 
-        scene = Scene(method=method, slow_force=False, outputs=(),
+        scene = Scene(integrator=method, slow_force=False, outputs=(),
                       dither="none" if dense else "square-velocity")
         system = make_system(scene)
         obs, sample = qoi_observer(sampled=dense)
@@ -228,7 +245,7 @@ class EngineQoI:
             init(p, y)
             obs_init(o)
             ctr[:] = 0
-            st = solve(work, y, p, cfg, o, ctr, rec)
+            st = solve(work, y, p, cfg[0], o, ctr, rec)
             finish(p[i_end], y, p, o, out)
             return st
 
@@ -241,15 +258,14 @@ class EngineQoI:
         self.adaptive = METHODS[method].ADAPTIVE
 
     def cfg(self, setting):
-        from engine.integrators.problem import CFG_SAMPLE_DT, CFG_SAMPLE_T0
-        from engine.kernels import settings_to_cfg
+        from engine.kernels import make_config
         from engine.settings import Settings
         if self.adaptive:
-            cfg = settings_to_cfg(Settings(rtol=setting, atol=1e-2 * setting))
+            cfg = make_config(Settings(rtol=setting, atol=1e-2 * setting))
         else:
-            cfg = settings_to_cfg(Settings(steps_per_period=int(setting)))
+            cfg = make_config(Settings(steps_per_period=int(setting)))
         if self.dense:
-            cfg[CFG_SAMPLE_DT], cfg[CFG_SAMPLE_T0] = math.pi / OMEGA, T_WIN
+            cfg["sample_dt"], cfg["sample_t0"] = math.pi / OMEGA, T_WIN
         return cfg
 
     def runner(self, W, setting):
@@ -435,7 +451,7 @@ def table_effects(repeats: int, n_steps: int = 4):
 
     st = Settings(steps_per_period=n_steps, h=(math.pi / OMEGA) / n_steps)
     full_p = P.pack(v_ref=V_REF, W=0.4, omega=OMEGA, t_end=T_END, slow_a=1.7, slow_omega=0.3)
-    full = Scene.from_params(full_p, method="rk4")
+    full = Scene.from_params(full_p, integrator="rk4")
     run = lambda sc, p: (lambda: simulate(sc, p, st))
     print(f"\nTable 3 -- only the effects a scene calls for (fig10 + slow force 1.7 sin(0.3 tau), "
           f"rk4 N={n_steps}, {T_END:.0f} tau; ms per trajectory, median of {repeats})")
@@ -445,7 +461,7 @@ def table_effects(repeats: int, n_steps: int = 4):
         p_off = full_p.copy()
         for k, v in off.items():
             p_off[P.INDEX[k]] = v
-        lean = Scene.from_params(p_off, method="rk4", dither=change.get("dither", full.dither))
+        lean = Scene.from_params(p_off, integrator="rk4", dither=change.get("dither", full.dither))
         fns = [run(full, full_p), run(full, p_off), run(lean, p_off)]
         for fn in fns:
             fn()
@@ -508,6 +524,7 @@ def main(argv=None):
     ap.add_argument("--no-stiff", action="store_true", help="skip the stiff-contact table")
     args = ap.parse_args(argv)
     anchor = Anchor()
+    print_machine(anchor)
     refs = read_references()
     rows = table_speed(anchor, args.methods.split(","), refs, args.repeats)
     print_speed(rows)

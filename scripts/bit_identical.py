@@ -45,22 +45,22 @@ def _scenes():
     for law in LAWS:
         for dither in DITHERS:
             yield (f"slider/{law}/{dither}/dopri5",
-                   dict(friction=law, dither=dither, method="dopri5", outputs=outputs),
+                   dict(friction=law, dither=dither, integrator="dopri5", outputs=outputs),
                    PROBE, None)
     for method in ("rk4", "rodas4"):
         for law in ("lugre", "elastoplastic"):
             yield (f"slider/{law}/square-velocity/{method}",
-                   dict(friction=law, method=method, outputs=outputs), PROBE, None)
+                   dict(friction=law, integrator=method, outputs=outputs), PROBE, None)
     for flag in ("stribeck", "bristle_damping", "viscous"):
         yield (f"slider/lugre/square-velocity/dopri5/no-{flag}",
-               dict(method="dopri5", outputs=outputs, **{flag: False}), PROBE, None)
+               dict(integrator="dopri5", outputs=outputs, **{flag: False}), PROBE, None)
     yield ("slider/lugre/square-velocity/dopri5/slow-force",
-           dict(method="dopri5", outputs=outputs, slow_force=True),
+           dict(integrator="dopri5", outputs=outputs, slow_force=True),
            {**PROBE, "slow_a": 0.1, "slow_omega": 2.0}, None)
     for law in LAWS:
         for method in ("dopri5", "rodas4"):
             yield (f"contact/{law}/sine-velocity/{method}",
-                   dict(system="contact", friction=law, dither="sine-velocity", method=method,
+                   dict(system="contact", friction=law, dither="sine-velocity", integrator=method,
                         outputs=("F_mean", "v_mean")),
                    CONTACT_PROBE, "contact")
 

@@ -63,7 +63,7 @@ def friction_samples(scene, p, t, y, dither, omega):
 
 def run(dither, W, omega, spp, vd):
     p = P.pack(vd=vd, W=W, omega=omega, slow_a=1.7, slow_omega=0.5, v_ref=0.0, t_end=3 * T_SLOW)
-    scene = Scene.from_params(p, system="slider", friction="lugre", dither=dither, method="rk4")
+    scene = Scene.from_params(p, system="slider", friction="lugre", dither=dither, integrator="rk4")
     t0 = time.perf_counter()
     sim = simulate(scene, p, Settings(steps_per_period=spp), record=True, max_records=2_000_000)
     h = (np.pi if dither == "square-velocity" else 2 * np.pi) / omega / spp

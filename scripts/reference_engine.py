@@ -21,7 +21,7 @@ discretisation even where one step per half-period already meets ``rtol``); the 
 ``self_error`` is the difference of the two in the error units below, an estimate of the
 reference's own error (``q`` is the second, finer run).
 
-Quantities of interest (as in /work/shared/anchors/README.md):
+Quantities of interest (as in ../shared/anchors/README.md):
 ``q = [z(t_end), e(t_end), v(t_end), mean v, p2p v]``, mean and peak-to-peak of ``v``
 over the switching instants ``k pi / omega`` in ``[t_end / 2, t_end]``; error units
 ``scale = [fc / sigma0, fc, v_ref, v_ref, |p2p_ref|]``.

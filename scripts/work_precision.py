@@ -188,7 +188,7 @@ def timed_run(scene, p, points, settings: Settings, repeats: int) -> dict:
 
 
 def run_setting(plan, method: str, setting: dict, repeats: int) -> dict:
-    scene = plan.scene.with_(method=method)
+    scene = plan.scene.with_(integrator=method)
     pts = plan.block_points(0)
     row = timed_run(scene, plan.params, pts, settings_of(setting), repeats)
     row.update(method=method, setting=setting, label=label(method, setting))
@@ -239,7 +239,7 @@ def study_scene(name: str, quick: bool, repeats: int, ladders: bool = True) -> d
     cfg = SCENES[name]
     plan = plan_of(cfg["spec"])
     for m in METHOD_ORDER:
-        warm_up(plan.scene.with_(method=m), plan.params, plan.block_points(0))
+        warm_up(plan.scene.with_(integrator=m), plan.params, plan.block_points(0))
     refs = [run_setting(plan, m, s, 1) for m, s in cfg["refs"]]
     for r in refs:
         print(f"  ref {r['method']:7s} {r['label']:12s} {r['time']:.3f} s  status {r['status']}",
@@ -290,7 +290,7 @@ def study_quench(repeats: int) -> dict:
         pts = np.concatenate([plan.block_points(b) for b in range(len(plan.blocks))])
         settings = plan.numerics.settings
         if level is None:
-            scene, settings = scene.with_(method=DP5_REF[0]), settings_of(DP5_REF[1])
+            scene, settings = scene.with_(integrator=DP5_REF[0]), settings_of(DP5_REF[1])
         pts = pts[np.argsort(pts[:, 0])]
         warm_up(scene, plan.params, pts[:1])
         row = timed_run(scene, plan.params, pts, settings, 1 if level is None else repeats)
@@ -298,7 +298,7 @@ def study_quench(repeats: int) -> dict:
         row["W"] = [float(w) for w in pts[:, 0]]
         v_ref = spec["grid"]["v_ref"][0]
         row["quenched"] = [bool(x < QUENCH_RATIO * v_ref) for x in p2p]
-        row["integrator"] = scene.method
+        row["integrator"] = scene.integrator
         out[level or "reference run"] = row
     return out
 

@@ -82,7 +82,7 @@ def study_crossover(quick: bool) -> dict:
     for sigma0 in (SIGMA0S[::2] if quick else SIGMA0S):
         plan = wp.plan_of(_fig10_short(sigma0))
         for m in wp.METHOD_ORDER:
-            wp.warm_up(plan.scene.with_(method=m), plan.params, plan.block_points(0))
+            wp.warm_up(plan.scene.with_(integrator=m), plan.params, plan.block_points(0))
         ref = wp.run_setting(plan, *wp.DP5_REF, 1)
         entry = {"ref_time": ref["time"], "ref_outputs": ref["outputs"], "methods": {}}
         for m in wp.METHOD_ORDER:
@@ -171,7 +171,7 @@ def study_effects(repeats: int = EFFECT_REPEATS, methods=("rk4", "dopri5")) -> d
     """The effect-cost table (module docstring) for each method of ``methods``."""
     out = {}
     for m in methods:
-        base = Scene(friction="elastoplastic", dither="sine-velocity", method=m,
+        base = Scene(friction="elastoplastic", dither="sine-velocity", integrator=m,
                      outputs=tuple(wp.ALL_SIM))
         p = P.pack(**SEC7_PARAMS)
         st = _settings(m)
@@ -205,8 +205,8 @@ def _observable_rows(base, p, st, repeats):
 
 # --------------------------------------------------------------------------- averaged
 def study_averaged(repeats: int) -> dict:
-    """Fig. 9(a)-like chart through run_block(Scene(method='averaged')): nothing integrated."""
-    scene = Scene(method="averaged", friction="lugre", dither="square-velocity",
+    """Fig. 9(a)-like chart through run_block(Scene(path='averaged')): nothing integrated."""
+    scene = Scene(path="averaged", friction="lugre", dither="square-velocity",
                   outputs=("F_eff", "max_real_eig", "stable"))
     W, v_ref = np.meshgrid(np.linspace(0.0, 1.0, 41), np.linspace(0.02, 1.0, 50),
                            indexing="ij")

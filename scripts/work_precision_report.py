@@ -271,7 +271,7 @@ def averaged_text(a: dict, levels: dict) -> str:
     std = levels.get("fig10", {}).get("standard")
     ratio = f" ({std['time'] / a['time_per_point']:,.0f}x less than a fig10 point at " \
             f"`standard`)" if std else ""
-    return (f"`run_block(Scene(method='averaged', friction='lugre', dither='square-velocity'))` "
+    return (f"`run_block(Scene(path='averaged', friction='lugre', dither='square-velocity'))` "
             f"on {a['points']} points (W in [0, 1] x v_ref in [0.02, 1]): max steps = "
             f"{a['steps_max']}, max evals = {a['evals_max']}, max rejected = "
             f"{a['rejected_max']}, all status OK: {a['all_ok']}; "

@@ -95,12 +95,11 @@ def base_params(spec: Spec) -> np.ndarray:
 
 
 def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
-    method = integrator if spec.method == "simulate" else spec.method
     dither = spec.dither
     if spec.method == "simulate" and np.all(grid.axis_values(spec, "W") == 0.0):
         dither = "none"  # no dither anywhere: no switches to step onto, no dither term
     return Scene.from_params(p, system=spec.system, friction=spec.friction, dither=dither,
-                             method=method, outputs=outputs)
+                             path=spec.method, integrator=integrator, outputs=outputs)
 
 
 def interleaved_blocks(n_points: int, n_blocks: int) -> list[np.ndarray]:

@@ -465,7 +465,7 @@ def _error_estimate(plan: Plan, client, cube) -> dict:
     point (sweeps.estimate), and compare."""
     finer = errest.finer_numerics(plan)
     index, pts = errest.sample(plan)
-    scene = plan.scene.with_(method=finer.integrator)
+    scene = plan.scene.with_(integrator=finer.integrator)
     futures = [client.submit(compute_block, scene, pts[i:i + 1], plan.params, finer.settings,
                              pure=False) for i in range(len(pts))]
     parts = client.gather(futures)

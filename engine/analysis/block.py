@@ -3,14 +3,14 @@
 ``analysis_block(scene, points, p)`` evaluates a block of grid points without time
 integration:
 
-* ``scene.method == "averaged"`` (slider, Secs. 5-6): ``F_eff`` = effective friction at
+* ``scene.path == "averaged"`` (slider, Secs. 5-6): ``F_eff`` = effective friction at
   slip velocity ``v_ref`` (Eq. 5.9 for LuGre; Eq. 5.14 for the static ``stribeck`` /
   ``coulomb`` laws), ``max_real_eig`` of the averaged Jacobian (Eqs. 6.4-6.7; for a
   static law the (e, v) system ``J = [[0, -1], [1, -F']]``), ``stable`` = 1.0 when
   ``max_real_eig < 0`` else 0.0. **omega is ignored**: averaging is the
   ``omega -> infinity`` limit. Dither ``none`` sets W = 0; ``sine-force`` uses the sine
   rule with velocity amplitude W (engine.analysis.quadrature).
-* ``scene.method == "hbm"`` (contact, Sec. 3): harmonic balance with ``v_m = v_ref``,
+* ``scene.path == "hbm"`` (contact, Sec. 3): harmonic balance with ``v_m = v_ref``,
   ``v_a = W`` (dither ``sine-velocity``; ``none`` sets v_a = 0), outputs
   ``F_mean, F_min, F_max, F_at_vmin, loop_area`` (engine.analysis.hbm).
 
@@ -50,7 +50,7 @@ def _requested(scene) -> tuple[str, ...]:
 
 def _check(scene, field, value, allowed, hint):
     if value not in allowed:
-        raise ValueError(f"scene.{field}: the {scene.method!r} path needs one of {allowed}, "
+        raise ValueError(f"scene.{field}: the {scene.path!r} path needs one of {allowed}, "
                          f"got {value!r}; {hint}")
 
 
@@ -67,7 +67,7 @@ def _effective_p(scene, p) -> np.ndarray:
 
 
 def _averaged(scene, W, v_ref, vd, p, n_quad, side):
-    _check(scene, "system", scene.system, ("slider",), "use method='hbm' for 'contact'")
+    _check(scene, "system", scene.system, ("slider",), "use path='hbm' for 'contact'")
     _check(scene, "friction", scene.friction, _AVERAGED_LAWS,
            "the elasto-plastic law has no averaged model: use a time integrator")
     if scene.dither == "none":
@@ -84,7 +84,7 @@ def _averaged(scene, W, v_ref, vd, p, n_quad, side):
 
 
 def _hbm(scene, W, omega, v_ref, vd, p, rtol):
-    _check(scene, "system", scene.system, ("contact",), "use method='averaged' for 'slider'")
+    _check(scene, "system", scene.system, ("contact",), "use path='averaged' for 'slider'")
     _check(scene, "friction", scene.friction, ("lugre",), "harmonic balance is for LuGre")
     _check(scene, "dither", scene.dither, ("sine-velocity", "none"),
            "the contact model's velocity is v_m + v_a cos(omega t)")
@@ -111,7 +111,7 @@ def analysis_block(scene, points, p, *, n_quad=N_QUAD, side=1.0, hbm_rtol=HBM_RT
     Parameters
     ----------
     scene : engine.scene.Scene
-        ``scene.method`` is ``"averaged"`` or ``"hbm"``; ``scene.outputs`` the requested
+        ``scene.path`` is ``"averaged"`` or ``"hbm"``; ``scene.outputs`` the requested
         names (all of the path's outputs if empty).
     points : (n, 4) float64 array
         Columns W, omega, v_ref, vd, overriding ``p[W], p[OMEGA], p[V_REF], p[VD]``.
@@ -131,8 +131,8 @@ def analysis_block(scene, points, p, *, n_quad=N_QUAD, side=1.0, hbm_rtol=HBM_RT
     status : (n,) int8 engine.status codes
     """
     if scene.path not in ("averaged", "hbm"):
-        raise ValueError(f"scene.method: analysis_block needs 'averaged' or 'hbm', "
-                         f"got {scene.method!r}; time integration is engine.batch.run_block")
+        raise ValueError(f"scene.path: analysis_block needs 'averaged' or 'hbm', "
+                         f"got {scene.path!r}; time integration is engine.batch.run_block")
     names = _requested(scene)
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 4:

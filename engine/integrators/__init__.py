@@ -9,10 +9,10 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
 ``ORDER: int``
     order of the propagated solution (the convergence tests check the log2-slope).
 ``ADAPTIVE: bool``
-    True: the method reads ``cfg[CFG_RTOL]`` and the per-component absolute tolerances
-    ``cfg[CFG_ATOL_I + i]``, ``i < n_err`` (``Settings.atol``, times the system's natural
+    True: the method reads ``cfg.rtol`` and the per-component absolute tolerances
+    ``cfg.atol_i[i]``, ``i < n_err`` (``Settings.atol``, times the system's natural
     scales with ``atol_units="natural"``; filled per point); False: it takes fixed
-    steps of nominal size ``cfg[CFG_H]`` (the driver computes it from
+    steps of nominal size ``cfg.h`` (the driver computes it from
     ``Settings.steps_per_period`` so that it divides the dither (half-)period).
 ``TABLEAU``
     frozen coefficients (:class:`engine.integrators.tableau.ButcherTableau`, which checks
@@ -35,7 +35,7 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
       no-op for the empty ``rec`` of the batch path);
     - ``needs_mid``: False when ``observe`` ignores ``ymid`` (skip the dense evaluation);
     - ``sampling`` and ``sample(t, y, p, sq, obs, ctr, rec)``: when True, call ``sample``
-      at every instant ``k * cfg[CFG_SAMPLE_DT] >= cfg[CFG_SAMPLE_T0]`` with the state
+      at every instant ``k * cfg.sample_dt >= cfg.sample_t0`` with the state
       from the method's continuous extension, *without* shortening any step to reach it
       (:func:`engine.integrators.problem.make_sampler` does the bookkeeping; the method
       keeps the next ``k`` in its work state and sets it on ``FRESH_START``). This is how
@@ -60,24 +60,26 @@ A method is *data + a kernel factory* in its own module ``engine/integrators/<na
         ``engine.integrators.problem.record_step(rec, ctr, cfg, t, y)`` after each
         accepted step (``rec`` is ``(capacity, 1 + n)``: time, then state). Returns an
         ``engine.status`` code: ``OK``, ``FAILED`` (``ctr[CTR_STEPS] + ctr[CTR_REJECTED]``
-        exceeded ``cfg[CFG_MAX_STEPS]`` or the step underflowed) or ``NON_FINITE``.
+        exceeded ``cfg.max_steps`` or the step underflowed) or ``NON_FINITE``.
+
+An adaptive method does not write this loop: it gives its parts -- attempt, dense output,
+controller, restart -- as an :class:`engine.integrators.adaptive.Method` from
+``make_method(problem)``, and ``make_stepper`` is
+``adaptive.make_stepper(problem, make_method(problem))``, the one adaptive step loop (step
+control, exact stops, kink landing, grazing probe, sampling, recording, counters).
 
 The shared driver (:mod:`engine.integrators.driver`) owns everything that is not the
 method: the stop grid (square-wave switches ``k * (pi / omega)``, ``t_transient``,
 ``t_end``, and period boundaries when an observable needs them), the sign ``sq`` per
 segment, the observer's stop hook, and the status. Register a new method by importing
 its module below and adding it to :data:`METHODS`; ``engine.kernels`` then builds
-``Scene(method=NAME)`` kernels with it and every batch/API path works unchanged.
+``Scene(integrator=NAME)`` kernels with it and every batch/API path works unchanged.
 """
 from __future__ import annotations
 
 from . import dopri5, rk4, rodas4
 from .problem import (
-    CFG_ATOL,
-    CFG_H,
-    CFG_MAX_STEPS,
-    CFG_RTOL,
-    CFG_SIZE,
+    CONFIG,
     CTR_EVALS,
     CTR_NREC,
     CTR_REJECTED,
@@ -95,7 +97,7 @@ METHODS = {m.NAME: m for m in (rk4, dopri5, rodas4)}
 METHODS["rosenbrock"] = rodas4  # alias: sweeps.accuracy.STIFF_METHOD
 
 __all__ = [
-    "CFG_ATOL", "CFG_H", "CFG_MAX_STEPS", "CFG_RTOL", "CFG_SIZE", "CTR_EVALS", "CTR_NREC",
+    "CONFIG", "CTR_EVALS", "CTR_NREC",
     "CTR_REJECTED", "CTR_SIZE", "CTR_STEPS", "FRESH_NONE", "FRESH_START", "FRESH_SWITCH",
     "METHODS", "Problem", "Stepper",
 ]

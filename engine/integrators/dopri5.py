@@ -7,17 +7,10 @@ of order 4 by Shampine (1986) as in Hairer-Norsett-Wanner I, II.6 and scipy's ``
   ``problem.n_err`` leading components; accept when ``err <= 1``.
 - Step control (I-controller): ``h_new = h * min(10, max(0.2, 0.9 err**(-1/5)))``, no growth
   right after a rejection; a non-finite ``err`` is a rejection with factor 0.2.
-- Stops: a segment ends exactly on ``t1`` (assigned; the step is stretched to it when
-  within 1 % of ``h``). FSAL: the last stage is the next first stage, re-evaluated
-  after a square-wave switch (``fresh``). The step size carries over between segments.
-- Kinks: after an accepted trial step, the problem's event functions are evaluated at its
-  end; if one changed sign, its root theta* is found on the dense output
-  (:mod:`engine.integrators.events`) and the step is retaken from ``t`` with ``theta* h``,
-  so that it ends on the kink (the discarded trial counts as rejected). An event reached or
-  passed is muted for the next step; one fallen short is found again by the next step,
-  whose dense output no longer straddles the corner. The DP5 error estimate is blind to a corner inside a step
-  (measured on Fig. 10: error stuck near 1e-4 whatever rtol); landing on it restores the
-  tolerance-proportional error.
+- FSAL: the last stage is the next first stage, re-evaluated after a square-wave switch.
+- Stops, kinks, landing, counters and status: the shared driver,
+  :mod:`engine.integrators.adaptive`; this module is the tableau, the attempt, the dense
+  output and the controller.
 """
 from __future__ import annotations
 
@@ -25,23 +18,10 @@ import math
 
 import numpy as np
 
-from .. import status as S
 from ..jit import njit
-from .events import make_grazing_probe, make_locator, past_corner, sign_change
-from .problem import (
-    CFG_ATOL_I,
-    CFG_MAX_STEPS,
-    CFG_RTOL,
-    CTR_EVALS,
-    CTR_REJECTED,
-    CTR_STEPS,
-    FRESH_NONE,
-    FRESH_START,
-    Stepper,
-    make_sampler,
-    record_step,
-    sample_due,
-)
+from . import adaptive
+from .adaptive import W_REJ, Method
+from .problem import FRESH_START, Stepper
 from .stepsize import make_initial_step
 from .tableau import ButcherTableau
 
@@ -74,14 +54,12 @@ TABLEAU = ButcherTableau(
     ],
 )
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
-STRETCH = 1.01      # take the rest of a segment when it is within 1 % of h
-EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
 LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
-W_H, W_REJ, W_K = 0, 1, 2   # work state: step size, reject flag, next sampling index
-
+MAX_SHORT = math.inf   # a landing falling short of its kink is retried by the next step
 
 def _make_attempt(tab, n, n_err, rhs):
-    """njit ``attempt(t, hh, y, p, sq, K, Y, rtol, atol) -> err``: stages 2..7 (k1 given).
+    """njit ``attempt(t, hh, y, yn, p, sq, mw, rtol, atol, st) -> err``: stages 2..7 (k1
+    given), the solution into ``yn``; ``mw = (K, T)``: the stages, and a scratch row.
 
     Compiled with floating-point contraction (fused multiply-add in the stage sums), as
     gcc does by default for the C reference (``-ffp-contract=fast``): ~1.5 % per step."""
@@ -96,9 +74,10 @@ def _make_attempt(tab, n, n_err, rhs):
     e1, e3, e4, e5, e6, e7 = e[0], e[2], e[3], e[4], e[5], e[6]
 
     @njit(error_model="numpy", refcount=False, fastmath={"contract"})
-    def attempt(t, hh, y, p, sq, K, Y, rtol, atol):
+    def attempt(t, hh, y, yn, p, sq, mw, rtol, atol, st):
+        K, T = mw
         k1, k2, k3, k4, k5, k6, k7 = K[0], K[1], K[2], K[3], K[4], K[5], K[6]
-        yt, yn = Y[0], Y[1]
+        yt = T[0]
         for i in range(n):
             yt[i] = y[i] + hh * a21 * k1[i]
         rhs(t + c2 * hh, yt, p, sq, k2)
@@ -130,13 +109,15 @@ def _make_attempt(tab, n, n_err, rhs):
 
 
 def _make_dense(tab, n):
-    """njit ``coeffs(K, Q)`` (dense polynomial per component) and ``dense_eval(y, hh, Q, th, out)``."""
+    """njit ``coeffs(y, yn, K, Q)`` (dense polynomial per component) and
+    ``dense_eval(y, hh, Q, th, out)``."""
     P = tab.dense
     rows = tuple(tuple(float(x) for x in P[:, j]) for j in range(P.shape[1]))
     d0, d1, d2, d3 = rows
 
     @njit(error_model="numpy", refcount=False)
-    def coeffs(K, Q):
+    def coeffs(y, yn, mw, Q):
+        K = mw[0]
         for i in range(n):
             Q[0, i] = (d0[0] * K[0, i] + d0[2] * K[2, i] + d0[3] * K[3, i] + d0[4] * K[4, i]
                        + d0[5] * K[5, i] + d0[6] * K[6, i])
@@ -166,113 +147,51 @@ def _factor(err, reject_prev):
     return fac
 
 
-def make_stepper(problem) -> Stepper:
-    """Kernel factory (protocol in engine.integrators)."""
-    n, n_err, rhs, observe = problem.n, problem.n_err, problem.rhs, problem.observe
-    n_ev, events = problem.n_events, problem.events
-    record, needs_mid, sampling = problem.record, problem.needs_mid, problem.sampling
+def make_method(problem) -> Method:
+    """DP5's parts for the shared driver (:mod:`engine.integrators.adaptive`)."""
+    n, n_err, rhs = problem.n, problem.n_err, problem.rhs
     attempt = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     initial_step = make_initial_step(n, n_err, rhs, ORDER)
-    locate = make_locator(events, n_ev, dense_eval)
-    graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
-    first_sample, emit = make_sampler(problem, dense_eval)
-    n_g = max(n_ev, 1)
 
     @njit(inline="always", error_model="numpy")
     def alloc():
-        # K: stages k1..k7; Y: yt, yn, ymid, ytmp; Q: dense coefficients;
-        # G: event values at step start / end / scratch / grazing probe x2; state: W_* slots
-        return (np.zeros((7, n)), np.zeros((4, n)), np.zeros((4, n)), np.zeros((5, n_g)),
-                np.zeros(3))
+        return np.zeros((7, n)), np.zeros((1, n))   # stages k1..k7; scratch
 
     @njit(error_model="numpy", refcount=False)
-    def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
-        K, Y, Q, G, state = work
-        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL_I:CFG_ATOL_I + n_err]   # atol per component
-        if fresh != FRESH_NONE:
-            rhs(t0, y, p, sq, K[0])
-            ctr[CTR_EVALS] += 1
-            if n_ev:
-                events(t0, y, p, sq, G[0])
-            if fresh == FRESH_START:
-                state[W_H] = initial_step(t0, y, K[0], p, sq, Y[0], K[1], rtol, atol, t1 - t0)
-                state[W_REJ] = 0.0
-                ctr[CTR_EVALS] += 1
-                if sampling:
-                    state[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
-        h = state[W_H]
-        t = t0
-        while t < t1:
-            rem = t1 - t
-            last = STRETCH * h >= rem
-            hh = rem if last else h
-            err = attempt(t, hh, y, p, sq, K, Y, rtol, atol)
-            ctr[CTR_EVALS] += 6
-            if ctr[CTR_STEPS] + ctr[CTR_REJECTED] >= cfg[CFG_MAX_STEPS]:
-                return S.FAILED
-            if not err <= 1.0:
-                ctr[CTR_REJECTED] += 1
-                h = hh * _factor(err, False)
-                state[W_REJ] = 1.0
-                if h < 1e-14 * max(1.0, abs(t)):
-                    return S.FAILED if math.isfinite(err) else S.NON_FINITE
-                continue
-            h_next = hh * _factor(err, state[W_REJ] != 0.0)
-            if n_ev:
-                events(t + hh, Y[1], p, sq, G[1])
-                th, idx = 2.0, -1
-                if sign_change(G[0], G[1], n_ev):
-                    coeffs(K, Q)
-                    th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[2])
-                elif graze:   # a dip through zero and back inside the step
-                    coeffs(K, Q)
-                    th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], Y[3], G[3], G[4])
-                    if th_b < 1.0:
-                        th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], Y[3], G[2], th_b)
-                # a corner within round-off of t is crossed, not landed on: a landing
-                # shorter than LANDING_FLOOR (relative) that falls short would otherwise
-                # repeat forever with zero-length steps (u = v + W sin hovering at 1e-13)
-                if EVENT_MARGIN < th < 1.0 - EVENT_MARGIN and \
-                        th * hh > LANDING_FLOOR * max(1.0, abs(t)):
-                    # retake the step so that it ends on the kink
-                    ctr[CTR_REJECTED] += 1
-                    hh = th * hh
-                    last = False
-                    err = attempt(t, hh, y, p, sq, K, Y, rtol, atol)
-                    ctr[CTR_EVALS] += 6
-                    if not err <= 1.0:
-                        ctr[CTR_REJECTED] += 1
-                        h = hh * _factor(err, False)
-                        state[W_REJ] = 1.0
-                        continue
-                    events(t + hh, Y[1], p, sq, G[1])
-                    past_corner(G[0], G[1], idx)   # the locator aims at the far side
-                    # fell short (dense output across the corner is only O(h^3) exact):
-                    # the next step finds the root again, from the near side
-            if needs_mid:
-                coeffs(K, Q)
-                dense_eval(y, hh, Q, 0.5, Y[2])
-            t_new = t1 if last else t + hh
-            observe(t, y, t_new, Y[1], Y[2], p, sq, obs)
-            if sampling and sample_due(state[W_K], cfg, t_new):
-                if not needs_mid:   # else Q holds this step's coefficients already
-                    coeffs(K, Q)
-                state[W_K] = emit(t, hh, t_new, y, Y[1], Q, p, sq, cfg, obs, ctr, rec,
-                                  state[W_K], Y[3])
-            for i in range(n):
-                y[i] = Y[1, i]
-                K[0, i] = K[6, i]
-            if n_ev:
-                for i in range(n_ev):
-                    G[0, i] = G[1, i]
-            ctr[CTR_STEPS] += 1
-            if record and rec.shape[0] > 0:   # the check here, not in the call: ~10 %
-                record_step(rec, ctr, cfg, t_new, y)
-            state[W_REJ] = 0.0
-            h = max(h, h_next) if (last or hh < h) else h_next
-            t = t_new
-        state[W_H] = h
-        return S.OK
+    def restart(t0, t1, y, p, sq, fresh, mw, rtol, atol, st):
+        """k1 at t0 (the FSAL stage is stale after a switch); at a start also h."""
+        K, T = mw
+        rhs(t0, y, p, sq, K[0])
+        if fresh != FRESH_START:
+            return 1
+        st[adaptive.W_H] = initial_step(t0, y, K[0], p, sq, T[0], K[1], rtol, atol, t1 - t0)
+        st[W_REJ] = 0.0
+        return 2
 
-    return Stepper(alloc, segment, (coeffs, dense_eval))
+    @njit(error_model="numpy", refcount=False)
+    def prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st):
+        return 0
+
+    @njit(error_model="numpy", refcount=False)
+    def advance(mw):
+        K = mw[0]
+        for i in range(n):
+            K[0, i] = K[6, i]   # FSAL
+
+    @njit(error_model="numpy", refcount=False)
+    def on_reject(err, hh, st):
+        return hh * _factor(err, False)
+
+    @njit(error_model="numpy", refcount=False)
+    def on_accept(err_trial, hh_trial, err, hh, st):
+        # from the trial: a landing on a kink says nothing about the smooth step size
+        return hh_trial * _factor(err_trial, st[W_REJ] != 0.0)
+
+    return Method(alloc, 0, 4, 6, restart, prepare, attempt, coeffs, dense_eval, advance,
+                  on_reject, on_accept, LANDING_FLOOR, MAX_SHORT)
+
+
+def make_stepper(problem) -> Stepper:
+    """Kernel factory (protocol in engine.integrators)."""
+    return adaptive.make_stepper(problem, make_method(problem))

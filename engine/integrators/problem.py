@@ -1,5 +1,6 @@
 """What a method's kernel factory receives (:class:`Problem`) and returns (:class:`Stepper`),
-and the index constants of the small run-time arrays ``cfg`` and ``ctr``.
+the run-time settings record ``cfg`` (:data:`CONFIG`) and the index constants of the
+counters ``ctr``.
 
 See the protocol in :mod:`engine.integrators`.
 """
@@ -7,24 +8,31 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from typing import Any, NamedTuple
+from typing import NamedTuple
+
+import numpy as np
 
 from ..jit import njit
 
-# cfg: float64 run-time settings of one point (no recompilation when they change)
-CFG_RTOL = 0        # relative tolerance (adaptive methods)
-CFG_ATOL = 1        # absolute tolerance (adaptive methods)
-CFG_H = 2           # nominal fixed step (fixed-step methods), set per point by the driver
-CFG_MAX_STEPS = 3   # budget of accepted + rejected steps
-CFG_STEPS_PER_PERIOD = 4   # Settings.steps_per_period (read by the driver to set CFG_H)
-CFG_H_FREE = 5      # Settings.h, the fixed step without dither (read by the driver)
-CFG_RECORD_EVERY = 6       # API recording: keep every m-th accepted step
-CFG_SAMPLE_DT = 7   # spacing of the sampling instants k * dt (problem.sampling; <= 0: none)
-CFG_SAMPLE_T0 = 8   # no sampling instant before this time
-CFG_ATOL_NATURAL = 9  # 1.0: Settings.atol in natural units (engine.settings), 0.0: absolute
-CFG_ATOL_I = 10     # per-component absolute tolerances of the n_err controlled components,
-N_ATOL = 4          # filled per point (kernels.run_point): cfg[CFG_ATOL_I + i], i < N_ATOL
-CFG_SIZE = CFG_ATOL_I + N_ATOL
+N_ATOL = 4   # room for the per-component absolute tolerances (n_err <= N_ATOL)
+
+#: The run-time settings of the kernels, one numpy record (``cfg``; no recompilation when
+#: they change); the njit code reads them by name, ``cfg.rtol``. Built from
+#: :class:`engine.settings.Settings` by :func:`engine.kernels.make_config`.
+CONFIG = np.dtype([
+    ("rtol", "f8"),              # relative tolerance (adaptive methods)
+    ("atol", "f8"),              # Settings.atol: absolute, or in natural units
+    ("atol_natural", "?"),       # atol in natural units (engine.settings): scaled per point
+    ("atol_i", "f8", (N_ATOL,)), # per-component absolute tolerances of the n_err
+    #                              controlled components, filled per point (kernels.run_point)
+    ("max_steps", "i8"),         # budget of accepted + rejected steps
+    ("steps_per_period", "i8"),  # Settings.steps_per_period (the driver sets h from it)
+    ("h_free", "f8"),            # Settings.h, the fixed step without dither
+    ("h", "f8"),                 # nominal fixed step (fixed-step methods), set per point
+    ("record_every", "i8"),      # API recording: keep every m-th accepted step
+    ("sample_dt", "f8"),         # spacing of the sampling instants k * dt (<= 0: none)
+    ("sample_t0", "f8"),         # no sampling instant before this time
+], align=True)
 
 # ctr: int64 counters of one point
 CTR_STEPS = 0       # accepted steps
@@ -51,7 +59,7 @@ class Problem(NamedTuple):
     record: bool = True    # call record_step (a run-time no-op for an empty rec)
     needs_mid: bool = True # observe reads ymid (else methods may pass any array)
     graze: bool = False    # events mark jumps of rhs: probe steps for grazing crossings
-    sampling: bool = False # call sample at the instants k * cfg[CFG_SAMPLE_DT] (dense output)
+    sampling: bool = False # call sample at the instants k * cfg.sample_dt (dense output)
     sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
 
 
@@ -60,7 +68,6 @@ class Stepper(NamedTuple):
 
     alloc: Callable        # alloc() -> work
     segment: Callable      # segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec) -> status
-    extra: Any = None      # method-specific helpers (e.g. dense output), optional
 
 
 @njit(error_model="numpy", refcount=False)
@@ -77,10 +84,10 @@ def record_sample(t, y, ctr, rec):
 @njit(error_model="numpy", refcount=False)
 def record_step(rec, ctr, cfg, t, y):
     """Append ``(t, y)`` as row ``ctr[CTR_NREC]`` of ``rec`` (shape ``(capacity, 1 + n)``)
-    for every ``cfg[CFG_RECORD_EVERY]``-th accepted step; call after counting the step.
+    for every ``cfg.record_every``-th accepted step; call after counting the step.
     A zero-capacity ``rec`` (the batch path) records nothing at the cost of one branch;
     silently stops when ``rec`` is full (the API reports truncation)."""
-    if rec.shape[0] == 0 or ctr[CTR_STEPS] % max(1, int(cfg[CFG_RECORD_EVERY])) != 0:
+    if rec.shape[0] == 0 or ctr[CTR_STEPS] % max(1, cfg.record_every) != 0:
         return
     record_sample(t, y, ctr, rec)
 
@@ -96,7 +103,7 @@ ROUNDOFF = 4e-16   # relative: an instant k * dt this close past a step end fall
 @njit(inline="always", error_model="numpy")
 def sample_due(k, cfg, t_new):
     """True when the sampling instant ``k * dt`` falls in a step ending at ``t_new``."""
-    return k * cfg[CFG_SAMPLE_DT] <= t_new + ROUNDOFF * abs(t_new)
+    return k * cfg.sample_dt <= t_new + ROUNDOFF * abs(t_new)
 
 
 def make_sampler(problem, dense_eval):
@@ -105,8 +112,8 @@ def make_sampler(problem, dense_eval):
     ``problem.sample`` is the hook (:func:`no_sample` when ``problem.sampling`` is off: the
     method then never calls ``first``/``emit``, whose compilation stays trivial).
 
-    The instants are ``t_k = k * dt`` (``dt = cfg[CFG_SAMPLE_DT]``, computed from ``k``,
-    never accumulated) with ``t_k >= cfg[CFG_SAMPLE_T0]``. A method keeps the next ``k``
+    The instants are ``t_k = k * dt`` (``dt = cfg.sample_dt``, computed from ``k``,
+    never accumulated) with ``t_k >= cfg.sample_t0``. A method keeps the next ``k``
     (a float) in its work state and, after each accepted step ``(t, t_new]`` that holds an
     instant, calls ``emit``; ``dense_eval(y, hh, Q, theta, out)`` is its continuous
     extension on that step (``Q`` its coefficients, valid for the accepted step).
@@ -121,10 +128,10 @@ def make_sampler(problem, dense_eval):
 
     @njit(error_model="numpy", refcount=False)
     def first(t0, y, p, sq, cfg, obs, ctr, rec):
-        dt = cfg[CFG_SAMPLE_DT]
+        dt = cfg.sample_dt
         if not dt > 0.0:
             return math.inf
-        k = math.ceil(max(t0, cfg[CFG_SAMPLE_T0]) / dt)
+        k = math.ceil(max(t0, cfg.sample_t0) / dt)
         if k * dt == t0:
             sample(t0, y, p, sq, obs, ctr, rec)
             k += 1
@@ -132,7 +139,7 @@ def make_sampler(problem, dense_eval):
 
     @njit(error_model="numpy", refcount=False)
     def emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec, k, ytmp):
-        dt = cfg[CFG_SAMPLE_DT]
+        dt = cfg.sample_dt
         if not dt > 0.0:
             return k
         ts = k * dt

@@ -1,7 +1,7 @@
 """Classical fixed-step Runge-Kutta of order 4 (Kutta 1901; Hairer-Norsett-Wanner I, II.1).
 
 Each segment ``[t0, t1]`` between stops is split into ``m = ceil((t1 - t0) / h)`` equal
-steps with ``h = cfg[CFG_H]`` set by the driver, so a square-wave half-period holds exactly
+steps with ``h = cfg.h`` set by the driver, so a square-wave half-period holds exactly
 ``Settings.steps_per_period`` steps and the last step lands on ``t1`` by assignment.
 Kinks of the right-hand side inside a step are not located (fixed step): near them the
 error is of lower order. The midpoint passed to observers, and the states at sampling
@@ -17,8 +17,6 @@ import numpy as np
 from .. import status as S
 from ..jit import njit
 from .problem import (
-    CFG_H,
-    CFG_MAX_STEPS,
     CTR_EVALS,
     CTR_REJECTED,
     CTR_STEPS,
@@ -91,7 +89,7 @@ def make_stepper(problem) -> Stepper:
         k1, k2, k3, k4, yt, y0, ym, ytmp = R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7]
         if sampling and fresh == FRESH_START:
             state[0] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
-        m = max(1, math.ceil((t1 - t0) / cfg[CFG_H] * (1.0 - 1e-12)))
+        m = max(1, math.ceil((t1 - t0) / cfg.h * (1.0 - 1e-12)))
         h = (t1 - t0) / m
         for j in range(m):
             t = t0 + j * h
@@ -120,7 +118,7 @@ def make_stepper(problem) -> Stepper:
                                 ytmp)
             if record and rec.shape[0] > 0:
                 record_step(rec, ctr, cfg, t_new, y)
-            if ctr[CTR_STEPS] + ctr[CTR_REJECTED] > cfg[CFG_MAX_STEPS]:
+            if ctr[CTR_STEPS] + ctr[CTR_REJECTED] > cfg.max_steps:
                 return S.FAILED
         return S.OK
 

@@ -20,12 +20,9 @@ instead of ringing, so the step follows accuracy, not stability (explicit DP5 ne
   the ``n_err`` leading components; accept when ``err <= 1``.
 - Step control: Gustafsson's predictive controller as in ``rodas.f``
   (:mod:`engine.integrators.rosenbrock_ops`).
-- Stops, kinks, counters and status: as :mod:`engine.integrators.dopri5` (segments end
-  exactly on ``t1``; a sign change of an event function inside an accepted step is located
-  on the dense output and the step retaken to end on it; the event is muted for the next
-  step once reached or passed and found again if the landing fell short, at most
-  ``MAX_SHORT`` times in a row). ``FAILED`` past ``cfg[CFG_MAX_STEPS]`` or on step-size
-  underflow, ``NON_FINITE`` when it underflows because the state blew up.
+- Stops, kinks, landing, counters and status: the shared driver,
+  :mod:`engine.integrators.adaptive`; this module is the tableau, the attempt (with its
+  Jacobian), the dense output and the controller.
 - After a square-wave switch the bristle state relaxes on the time scale
   ``g / (sigma0 |u|)``: the step restarts there from the initial-step heuristic (one
   evaluation) rather than being cut down by rejections from the previous half-period's.
@@ -36,23 +33,10 @@ import math
 
 import numpy as np
 
-from .. import status as S
 from ..jit import njit
-from .events import make_grazing_probe, make_locator, past_corner, sign_change
-from .problem import (
-    CFG_ATOL_I,
-    CFG_MAX_STEPS,
-    CFG_RTOL,
-    CTR_EVALS,
-    CTR_REJECTED,
-    CTR_STEPS,
-    FRESH_NONE,
-    FRESH_START,
-    Stepper,
-    make_sampler,
-    record_step,
-    sample_due,
-)
+from . import adaptive
+from .adaptive import W_H, W_METHOD, W_REJ, Method
+from .problem import FRESH_START, Stepper
 from .rosenbrock import RosenbrockTableau
 from .rosenbrock_ops import (
     accept_divisor,
@@ -96,12 +80,13 @@ TABLEAU = RosenbrockTableau(
            [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
             -6.594389125716872, 0.0]],
 )
-STRETCH = 1.01       # take the rest of a segment when it is within 1 % of h
-EVENT_MARGIN = 1e-12  # roots closer than this (in theta) to a step end are not landed on
+LANDING_FLOOR = 0.0  # every landing is taken, however short
 MAX_SHORT = 2        # landings in a row that fall short of the same kink before it is passed
-# scalar slots of the work state
-W_H, W_REJ, W_HOLD, W_ERROLD, W_TDEP, W_SHORT, W_K = 0, 1, 2, 3, 4, 5, 6  # W_K: next sample
-
+# the method's scalar slots in the driver's state: the last accepted step and its error
+# (for the predictive controller), and whether f depends on t
+W_HOLD, W_ERROLD, W_TDEP = W_METHOD, W_METHOD + 1, W_METHOD + 2
+# rows of the vector scratch R
+R_YT, R_F0, R_FT, R_R = 0, 1, 2, 3
 
 def _check_layout(tab):
     """The unrolled stages assume RODAS's layout: stiffly accurate (the solution is the
@@ -198,13 +183,14 @@ def _make_attempt(tab, n, n_err, rhs):
 
 
 def _make_dense(tab, n):
-    """njit ``coeffs(y, yn, U, Q)`` and ``dense_eval(y, hh, Q, th, out)`` (rodas.f form:
+    """njit ``coeffs(y, yn, mw, Q)`` and ``dense_eval(y, hh, Q, th, out)`` (rodas.f form:
     ``y + th (y1 - y) + th (1 - th) (Q1 + th Q2)``)."""
     D = tab.dense.copy()
     s = tab.stages
 
     @njit(error_model="numpy", refcount=False)
-    def coeffs(y, yn, U, Q):
+    def coeffs(y, yn, mw, Q):
+        U = mw[0]
         for k in range(n):
             q1 = q2 = 0.0
             for i in range(s):
@@ -220,32 +206,23 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-def make_stepper(problem) -> Stepper:
-    """Kernel factory (protocol in engine.integrators)."""
-    n, n_err, rhs, observe = problem.n, problem.n_err, problem.rhs, problem.observe
+def make_method(problem) -> Method:
+    """RODAS's parts for the shared driver (:mod:`engine.integrators.adaptive`)."""
+    n, n_err, rhs = problem.n, problem.n_err, problem.rhs
     n_ev, events = problem.n_events, problem.events
-    record, needs_mid = problem.record, problem.needs_mid
-    s = TABLEAU.stages
-    gamma = TABLEAU.gamma
-    attempt = _make_attempt(TABLEAU, n, n_err, rhs)
+    s, gamma = TABLEAU.stages, TABLEAU.gamma
+    stages = _make_attempt(TABLEAU, n, n_err, rhs)
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     initial_step = make_initial_step(n, n_err, rhs, ORDER + 1)
     jac = make_fd_jacobian(n, n_err, rhs, n_ev, events)
     dfdt = make_time_derivative(n, rhs, n_ev, events)
     depends_on_t = make_time_probe(n, n_err, rhs)
-    locate = make_locator(events, n_ev, dense_eval)
-    graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
-    sampling = problem.sampling
-    first_sample, emit = make_sampler(problem, dense_eval)
-    n_g = max(n_ev, 1)
 
     @njit(error_model="numpy")
     def alloc():
-        # U: stages; Y: yt, yn, ym, ytmp, f0, ft, r; Q: dense coefficients; G: event values
-        # at step start / end / scratch x2 / grazing probe; J, M, Minv: Jacobian, scratch,
-        # inverse of I / (h gamma) - J; state: W_* slots
-        return (np.zeros((s, n)), np.zeros((7, n)), np.zeros((3, n)), np.zeros((5, n_g)),
-                np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n)), np.zeros(7))
+        # U: stages; R: rows R_*; J, M, Minv: Jacobian, scratch, inverse of I / (h gamma) - J
+        return (np.zeros((s, n)), np.zeros((4, n)), np.zeros((n, n)), np.zeros((n, n)),
+                np.zeros((n, n)))
 
     @njit(error_model="numpy", refcount=False)
     def factor(J, M, Minv, hh):
@@ -256,130 +233,55 @@ def make_stepper(problem) -> Stepper:
         return invert(M, Minv)
 
     @njit(error_model="numpy", refcount=False)
-    def restart(t0, t1, y, p, sq, fresh, work, rtol, atol):
-        """Events at t0; at the first segment of a point or after a switch a new h."""
-        Y, G, state = work[1], work[3], work[7]
-        if n_ev:
-            events(t0, y, p, sq, G[0])
+    def restart(t0, t1, y, p, sq, fresh, mw, rtol, atol, st):
+        """At the first segment of a point or after a switch, a new h."""
+        R = mw[1]
         if fresh == FRESH_START:
-            state[W_TDEP] = 1.0 if depends_on_t(t0, y, p, sq, Y[4], Y[5], Y[0]) else 0.0
-        rhs(t0, y, p, sq, Y[4])
-        state[W_H] = initial_step(t0, y, Y[4], p, sq, Y[0], Y[5], rtol, atol, t1 - t0)
-        state[W_REJ] = 0.0
-        state[W_HOLD] = 0.0
-        state[W_SHORT] = 0.0
+            st[W_TDEP] = 1.0 if depends_on_t(t0, y, p, sq, R[R_F0], R[R_FT], R[R_YT]) else 0.0
+        rhs(t0, y, p, sq, R[R_F0])
+        st[W_H] = initial_step(t0, y, R[R_F0], p, sq, R[R_YT], R[R_FT], rtol, atol, t1 - t0)
+        st[W_REJ] = 0.0
+        st[W_HOLD] = 0.0
         return 6 if fresh == FRESH_START else 2
 
     @njit(error_model="numpy", refcount=False)
-    def try_step(t, hh, y, p, sq, work, rtol, atol, ctr):
+    def prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st):
+        """Jacobian (and df/dt) at (t, y), kept through the rejections of this step."""
+        R, J = mw[1], mw[2]
+        rhs(t, y, p, sq, R[R_F0])
+        jac(t, y, R[R_F0], p, sq, J, R[R_YT], R[R_FT], atol, rtol, G[2], G[3])
+        if st[W_TDEP] == 0.0:
+            return 1 + n_err
+        dfdt(t, y, R[R_F0], p, sq, min(h, t1 - t), R[R_FT], R[R_YT], G[2], G[3])
+        return 3 + n_err
+
+    @njit(error_model="numpy", refcount=False)
+    def attempt(t, hh, y, yn, p, sq, mw, rtol, atol, st):
         """Factor and attempt one step of size hh from (t, y); err (inf if singular)."""
-        U, Y, J, M, Minv, state = work[0], work[1], work[4], work[5], work[6], work[7]
-        ctr[CTR_EVALS] += s - 1
+        U, R, J, M, Minv = mw
         if not factor(J, M, Minv, hh):
             return np.inf
-        return attempt(t, hh, y, Y[4], Y[5], state[W_TDEP] != 0.0, Minv, p, sq, U, Y[0],
-                       Y[6], Y[1], rtol, atol)
+        return stages(t, hh, y, R[R_F0], R[R_FT], st[W_TDEP] != 0.0, Minv, p, sq, U,
+                      R[R_YT], R[R_R], yn, rtol, atol)
 
     @njit(error_model="numpy", refcount=False)
-    def land(t, hh, err, y, p, sq, work, rtol, atol, ctr):
-        """After an accepted trial of size hh: if an event changed sign, retake the step so
-        that it ends on the earliest root (the trial counts as rejected), as dopri5 does.
-        Returns (hh, err, retaken)."""
-        U, Y, Q, G, state = work[0], work[1], work[2], work[3], work[7]
-        yn, ytmp = Y[1], Y[3]
-        events(t + hh, yn, p, sq, G[1])
-        if sign_change(G[0], G[1], n_ev):
-            coeffs(y, yn, U, Q)
-            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
-        elif graze:   # a dip through zero and back inside the step (G[3]: jac scratch)
-            coeffs(y, yn, U, Q)
-            th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[3], G[4])
-            if not th_b < 1.0:
-                return hh, err, False
-            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b)
-        else:
-            return hh, err, False
-        if not EVENT_MARGIN < th < 1.0 - EVENT_MARGIN:
-            return hh, err, False
-        ctr[CTR_REJECTED] += 1
-        hh = th * hh
-        err = try_step(t, hh, y, p, sq, work, rtol, atol, ctr)
-        if err <= 1.0:
-            events(t + hh, yn, p, sq, G[1])
-            state[W_SHORT] = 0.0 if G[1, idx] * G[0, idx] <= 0.0 else state[W_SHORT] + 1.0
-            if state[W_SHORT] == 0.0:
-                past_corner(G[0], G[1], idx)   # the locator aims at the far side
-            elif state[W_SHORT] > MAX_SHORT:
-                G[1, idx] = 0.0   # unreachable: mute it for the next step
-                state[W_SHORT] = 0.0
-            # else it fell short (the dense output is O(h^4) off across the corner): the
-            # next step finds the root again, from the near side -- at most MAX_SHORT
-            # times in a row: a grazing kink (u -> 0 with du/dt -> 0, e.g. W = v_ref) or
-            # one that rounding cannot reach (u = v - W stuck one ulp short) is passed
-        return hh, err, True
+    def advance(mw):
+        pass
 
     @njit(error_model="numpy", refcount=False)
-    def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
-        U, Y, Q, G, J, state = work[0], work[1], work[2], work[3], work[4], work[7]
-        yn, ym, f0, ft = Y[1], Y[2], Y[4], Y[5]
-        rtol, atol = cfg[CFG_RTOL], cfg[CFG_ATOL_I:CFG_ATOL_I + n_err]   # atol per component
-        if fresh != FRESH_NONE:
-            ctr[CTR_EVALS] += restart(t0, t1, y, p, sq, fresh, work, rtol, atol)
-            if sampling and fresh == FRESH_START:
-                state[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
-        h = state[W_H]
-        t = t0
-        while t < t1:
-            # Jacobian (and df/dt) at (t, y), kept through rejections of this step
-            rhs(t, y, p, sq, f0)
-            jac(t, y, f0, p, sq, J, Y[0], ft, atol, rtol, G[2], G[3])
-            ctr[CTR_EVALS] += 1 + n_err
-            if state[W_TDEP] != 0.0:
-                dfdt(t, y, f0, p, sq, min(h, t1 - t), ft, Y[0], G[2], G[3])
-                ctr[CTR_EVALS] += 2
-            while True:
-                rem = t1 - t
-                last = STRETCH * h >= rem
-                hh = rem if last else h
-                err = try_step(t, hh, y, p, sq, work, rtol, atol, ctr)
-                if ctr[CTR_STEPS] + ctr[CTR_REJECTED] >= cfg[CFG_MAX_STEPS]:
-                    state[W_H] = h
-                    return S.FAILED
-                if err <= 1.0 and n_ev:
-                    hh, err, retaken = land(t, hh, err, y, p, sq, work, rtol, atol, ctr)
-                    last = last and not retaken
-                if err <= 1.0:
-                    break
-                ctr[CTR_REJECTED] += 1
-                h = hh / step_divisor(err)
-                state[W_REJ] = 1.0
-                if h < 1e-14 * max(1.0, abs(t)):
-                    state[W_H] = h
-                    return S.FAILED if math.isfinite(err) else S.NON_FINITE
-            h_next = hh / accept_divisor(err, hh, state[W_HOLD], state[W_ERROLD],
-                                         state[W_REJ] != 0.0)
-            state[W_HOLD], state[W_ERROLD] = hh, max(1e-2, err)
-            if needs_mid:
-                coeffs(y, yn, U, Q)
-                dense_eval(y, hh, Q, 0.5, ym)
-            t_new = t1 if last else t + hh
-            observe(t, y, t_new, yn, ym, p, sq, obs)
-            if sampling and sample_due(state[W_K], cfg, t_new):
-                if not needs_mid:   # else Q holds this step's coefficients already
-                    coeffs(y, yn, U, Q)
-                state[W_K] = emit(t, hh, t_new, y, yn, Q, p, sq, cfg, obs, ctr, rec,
-                                  state[W_K], Y[3])
-            for i in range(n):
-                y[i] = yn[i]
-            for i in range(n_ev):
-                G[0, i] = G[1, i]
-            ctr[CTR_STEPS] += 1
-            if record:
-                record_step(rec, ctr, cfg, t_new, y)
-            state[W_REJ] = 0.0
-            h = max(h, h_next) if (last or hh < h) else h_next
-            t = t_new
-        state[W_H] = h
-        return S.OK
+    def on_reject(err, hh, st):
+        return hh / step_divisor(err)
 
-    return Stepper(alloc, segment, (coeffs, dense_eval))
+    @njit(error_model="numpy", refcount=False)
+    def on_accept(err_trial, hh_trial, err, hh, st):
+        h_next = hh / accept_divisor(err, hh, st[W_HOLD], st[W_ERROLD], st[W_REJ] != 0.0)
+        st[W_HOLD], st[W_ERROLD] = hh, max(1e-2, err)
+        return h_next
+
+    return Method(alloc, 3, 3, s - 1, restart, prepare, attempt, coeffs, dense_eval, advance,
+                  on_reject, on_accept, LANDING_FLOOR, MAX_SHORT)
+
+
+def make_stepper(problem) -> Stepper:
+    """Kernel factory (protocol in engine.integrators)."""
+    return adaptive.make_stepper(problem, make_method(problem))

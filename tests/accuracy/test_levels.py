@@ -32,7 +32,7 @@ SPEC = {  # Fig. 10(d): LuGre slider, paper Sec. 5.1 parameters, square-velocity
 
 def _run(plan, scene, settings) -> dict:
     res = run_block(scene, plan.block_points(0), plan.params, settings)
-    assert res.status[0] == S.OK, f"{scene.method} {settings}: status {res.status[0]}"
+    assert res.status[0] == S.OK, f"{scene.integrator} {settings}: status {res.status[0]}"
     return {k: float(v[0]) for k, v in res.outputs.items()}
 
 
@@ -43,8 +43,8 @@ def _error(out: dict, ref: dict) -> float:
 @pytest.fixture(scope="module")
 def reference():
     plan = make_plan(parse_spec(SPEC), "reference")
-    dp5 = _run(plan, plan.scene.with_(method="dopri5"), Settings(rtol=1e-12, atol=1e-15))
-    rk4 = _run(plan, plan.scene.with_(method="rk4"), Settings(steps_per_period=128))
+    dp5 = _run(plan, plan.scene.with_(integrator="dopri5"), Settings(rtol=1e-12, atol=1e-15))
+    rk4 = _run(plan, plan.scene.with_(integrator="rk4"), Settings(steps_per_period=128))
     assert _error(rk4, dp5) < 1e-3 * TARGET_ERROR["reference"]
     return dp5
 

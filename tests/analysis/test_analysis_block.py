@@ -11,7 +11,7 @@ from engine.scene import Scene
 
 PAPER = P.pack()
 PC = P.pack(P.CONTACT_DEFAULTS)
-AVG = Scene(method="averaged", dither="square-velocity", outputs=("F_eff", "max_real_eig", "stable"))
+AVG = Scene(path="averaged", dither="square-velocity", outputs=("F_eff", "max_real_eig", "stable"))
 
 
 def test_averaged_block_matches_direct_calls_and_ignores_omega():
@@ -43,7 +43,7 @@ def test_non_finite_point_gets_its_status():
 
 
 def test_hbm_block_matches_contact_hbm():
-    scene = Scene(system="contact", method="hbm", dither="sine-velocity")
+    scene = Scene(system="contact", path="hbm", dither="sine-velocity")
     pts = np.array([[1e-3, 100.0, 1e-3, 1e-3], [1e-3, 0.0, 1e-3, 1e-3]])
     out, status = analysis_block(scene, pts, PC)
     assert set(out) == {"F_mean", "F_min", "F_max", "F_at_vmin", "loop_area"}
@@ -53,12 +53,12 @@ def test_hbm_block_matches_contact_hbm():
 
 
 @pytest.mark.parametrize("scene, match", [
-    (Scene(method="dopri5"), "scene.method: analysis_block needs"),
-    (Scene(method="averaged", outputs=("v_mean",)), "scene.outputs: \\['v_mean'\\] are not outputs"),
-    (Scene(method="averaged", friction="elastoplastic"), "scene.friction: .* elasto-plastic law has no averaged"),
-    (Scene(method="averaged", system="contact"), "scene.system: .*use method='hbm'"),
-    (Scene(method="hbm"), "scene.system: .*use method='averaged'"),
-    (Scene(system="contact", method="hbm", dither="square-velocity"), "scene.dither: the 'hbm' path needs"),
+    (Scene(integrator="dopri5"), "scene.path: analysis_block needs"),
+    (Scene(path="averaged", outputs=("v_mean",)), "scene.outputs: \\['v_mean'\\] are not outputs"),
+    (Scene(path="averaged", friction="elastoplastic"), "scene.friction: .* elasto-plastic law has no averaged"),
+    (Scene(path="averaged", system="contact"), "scene.system: .*use path='hbm'"),
+    (Scene(path="hbm"), "scene.system: .*use path='averaged'"),
+    (Scene(system="contact", path="hbm", dither="square-velocity"), "scene.dither: the 'hbm' path needs"),
 ])
 def test_scene_errors_name_the_field(scene, match):
     with pytest.raises(ValueError, match=match):

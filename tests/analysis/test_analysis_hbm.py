@@ -161,7 +161,7 @@ def test_hbm_matches_the_engines_contact_system(omega):
     from engine.settings import Settings
     T = 2 * np.pi / omega
     p = P.pack(P.CONTACT_DEFAULTS, W=VA, v_ref=VM, omega=omega, t_transient=1.0, t_end=1.0 + 10 * T)
-    scene = Scene(system="contact", friction="lugre", dither="sine-velocity", method="dopri5",
+    scene = Scene(system="contact", friction="lugre", dither="sine-velocity", integrator="dopri5",
                   outputs=("F_mean",))
     sim = api.simulate(scene, p, Settings(rtol=1e-10, atol=1e-16), record=True)
     r = contact_hbm(VM, VA, omega, PC)

@@ -6,8 +6,8 @@ from engine.scene import Scene
 ALL = tuple(SIMULATE)
 
 
-def scene(friction="lugre", dither="square-velocity", method="dopri5", slow=False,
+def scene(friction="lugre", dither="square-velocity", integrator="dopri5", slow=False,
           system="slider", outputs=ALL):
     """Scene with every simulate observable (kernels shared across test modules)."""
-    return Scene(system=system, friction=friction, dither=dither, method=method,
+    return Scene(system=system, friction=friction, dither=dither, integrator=integrator,
                  slow_force=slow, outputs=outputs)

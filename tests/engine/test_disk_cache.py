@@ -12,7 +12,7 @@ from engine.batch import run_block
 from engine.kernels import block_kernel
 from engine.scene import Scene
 from engine.settings import Settings
-scene = Scene(friction="lugre", dither="square-velocity", method="rk4", slow_force=False,
+scene = Scene(friction="lugre", dither="square-velocity", integrator="rk4", slow_force=False,
               outputs=("v_mean",))
 t0 = time.perf_counter()
 res = run_block(scene, np.array([[0.4, 1000.0, 0.4, 0.1]]), P.pack(t_end=0.5), Settings())
@@ -47,7 +47,7 @@ def test_distinct_closures_get_distinct_uuids():
     from engine.kernels import block_kernel
     from engine.scene import Scene
 
-    a = Scene(friction="lugre", dither="none", method="rk4", outputs=("v_mean", "F_mean"))
+    a = Scene(friction="lugre", dither="none", integrator="rk4", outputs=("v_mean", "F_mean"))
     b = a.with_(outputs=("F_mean", "v_mean"))
     ua, ub = block_kernel(a)._ditherlab_uuid, block_kernel(b)._ditherlab_uuid
     assert ua.startswith("ditherlab-") and ub.startswith("ditherlab-") and ua != ub
@@ -60,7 +60,7 @@ from engine import params as P
 from engine.batch import run_block
 from engine.scene import Scene
 from engine.settings import Settings
-base = Scene(friction="lugre", dither="none", method="rk4", outputs=("v_mean", "F_mean"))
+base = Scene(friction="lugre", dither="none", integrator="rk4", outputs=("v_mean", "F_mean"))
 res = {}
 for order in sys.argv[1:]:
     scene = base.with_(outputs=tuple(order.split(",")))

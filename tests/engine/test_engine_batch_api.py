@@ -49,7 +49,7 @@ def test_bad_points_get_a_status_not_an_exception():
 
 
 def test_rk4_counts_four_evaluations_per_step():
-    res = run_block(scene(method="rk4"), POINTS[:1], P.pack(t_end=0.5),
+    res = run_block(scene(integrator="rk4"), POINTS[:1], P.pack(t_end=0.5),
                     Settings(steps_per_period=4))
     # 31 whole half-periods pi/200 in [0, 0.5], 4 steps each; the last 0.83 of one: 4 steps
     assert res.steps[0] == 4 * 32 and res.evals[0] == 4 * res.steps[0]
@@ -59,11 +59,11 @@ def test_analysis_paths_dispatch_lazily(monkeypatch):
     calls = []
 
     def analysis_block(sc, points, p):
-        calls.append(sc.method)
+        calls.append(sc.path)
         return {"F_eff": points[:, 0] * 2}, np.zeros(len(points), np.int8)
     monkeypatch.setitem(sys.modules, "engine.analysis.block",
                         types.SimpleNamespace(analysis_block=analysis_block))
-    res = run_block(Scene(method="averaged", outputs=("F_eff",)), POINTS, P_SHORT)
+    res = run_block(Scene(path="averaged", outputs=("F_eff",)), POINTS, P_SHORT)
     assert calls == ["averaged"] and np.array_equal(res.outputs["F_eff"], 2 * POINTS[:, 0])
     assert res.status.dtype == np.int8 and np.all(res.steps == 0)
     assert res.cost_s.shape == (3,)
@@ -86,11 +86,11 @@ def test_recording_and_decimation():
     (lambda: run_block(scene(), POINTS, np.zeros(5)), r"p: expected the parameter vector"),
     (lambda: run_block(scene(outputs=("v_max",)), POINTS, P_SHORT),
      r"outputs: unknown simulate observable\(s\) \['v_max'\]"),
-    (lambda: run_block(scene(method="euler"), POINTS, P_SHORT),
-     r"method: unknown integrator 'euler'; known: .*'dopri5'.*'rk4'"),
+    (lambda: run_block(scene(integrator="euler"), POINTS, P_SHORT),
+     r"integrator: unknown integrator 'euler'; known: .*'dopri5'.*'rk4'"),
     (lambda: simulate(scene(system="contact", dither="sine-force"), P_SHORT),
      r"dither: 'sine-force' needs a mass"),
-    (lambda: simulate(Scene(method="hbm"), P_SHORT), r"'hbm' is an analysis path"),
+    (lambda: simulate(Scene(path="hbm"), P_SHORT), r"'hbm' is an analysis path"),
     (lambda: simulate(scene(), P_SHORT, record=True, record_every=0),
      r"record_every must be >= 1, got 0"),
 ])

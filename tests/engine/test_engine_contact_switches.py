@@ -62,7 +62,7 @@ def test_lugre_bristle_bound_and_exact_switch_times():
 
 def test_rk4_steps_divide_the_half_period():
     p = P.pack(v_ref=0.4, W=0.4, omega=1000.0, t_end=0.05)
-    r = simulate(scene(method="rk4"), p, Settings(steps_per_period=4),
+    r = simulate(scene(integrator="rk4"), p, Settings(steps_per_period=4),
                  record=True)
     sw = switch_times(1000.0, 0.05)
     assert np.array_equal(r.t[3::4][:len(sw)], sw)    # every 4th step end is a switch

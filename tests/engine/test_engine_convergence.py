@@ -8,7 +8,7 @@
   Reference: scipy DOP853 at rtol 1e-12 (tests/engine/reference.py).
 - Fig. 10 kink: on the anchor scene (v_ref = 0.4, W = 0.4, omega = 1000, tau in [0, 100]),
   the DP5 error in the anchor's quantities of interest falls as rtol falls. Reference
-  values: /work/shared/anchors/README.md table ("Converged references (RK4 with 2048 steps
+  values: ../shared/anchors/README.md table ("Converged references (RK4 with 2048 steps
   per half-period, checked against an adaptive DP5 at rtol 1e-14)"), same error measure.
 """
 import numpy as np
@@ -40,7 +40,7 @@ def test_order_of_convergence(method, order, steps):
     for n in steps:
         q = p.copy()
         q[P.OMEGA] = np.pi * n / T_END           # stop every T_END / n
-        r = simulate(scene(method=method), q, Settings(steps_per_period=1, rtol=1e6, atol=1e6),
+        r = simulate(scene(integrator=method), q, Settings(steps_per_period=1, rtol=1e6, atol=1e6),
                      record=True)
         assert r.status == 0 and r.y[:, 1].min() > 0.1   # no |u| kink on the way
         assert r.steps <= n + 6

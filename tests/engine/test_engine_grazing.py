@@ -51,7 +51,7 @@ def reference():
 @pytest.mark.parametrize("method", ["dopri5", "rodas4"])
 def test_band_dips_are_landed_on_and_F_mean_follows_the_tolerance(method, reference):
     scene = Scene.from_params(PARAMS, system="contact", friction="stribeck",
-                              dither="sine-velocity", method=method, outputs=("F_mean",))
+                              dither="sine-velocity", integrator=method, outputs=("F_mean",))
     errs = []
     for rtol in (1e-5, 1e-7, 1e-9):
         r = simulate(scene, PARAMS, Settings(rtol=rtol, atol=1e-4 * rtol), record=True)

@@ -36,7 +36,7 @@ CASES = [  # dither, parameters: stick-slip without dither (|u| = 0 kinks), and 
 def test_samples_match_reference_at_instants(method, dither, kw):
     settings, tol = METHODS[method]
     p = P.pack(t_end=T_END, **kw)
-    sc = scene("lugre", dither, method=method, outputs=("v_mean",))
+    sc = scene("lugre", dither, integrator=method, outputs=("v_mean",))
     r = simulate(sc, p, settings, record_dt=DT, record_from=T_FROM)
     assert r.status == 0
     k = np.arange(np.ceil(T_FROM / DT), np.floor(T_END / DT) + 1)
@@ -50,7 +50,7 @@ def test_samples_match_reference_at_instants(method, dither, kw):
 def test_sampling_does_not_touch_the_trajectory(method):
     settings, _ = METHODS[method]
     p = P.pack(t_end=T_END, v_ref=0.4)
-    sc = scene("lugre", "none", method=method, outputs=("v_mean",))
+    sc = scene("lugre", "none", integrator=method, outputs=("v_mean",))
     plain = simulate(sc, p, settings)
     sampled = simulate(sc, p, settings, record_dt=0.0123)
     assert (sampled.steps, sampled.rejected, sampled.evals) == \
@@ -69,7 +69,7 @@ def test_instant_at_t_end_is_kept_despite_rounding_and_bad_dt_samples_nothing():
     end. A non-positive spacing in cfg (only reachable below the API) samples nothing and
     must not hang."""
     from engine.integrators.problem import CTR_NREC, CTR_SIZE
-    from engine.kernels import point_kernel, settings_to_cfg
+    from engine.kernels import make_config, point_kernel
 
     sc = scene("lugre", "none", outputs=("v_mean",))
     r = simulate(sc, P.pack(t_end=0.3, v_ref=0.4), record_dt=0.1)
@@ -78,7 +78,7 @@ def test_instant_at_t_end_is_kept_despite_rounding_and_bad_dt_samples_nothing():
     pk = point_kernel(sc, sampled_record=True)
     for dt in (0.0, -0.1):
         ctr, rec = np.zeros(CTR_SIZE, np.int64), np.empty((10, pk.n + 1))
-        status = pk.run_point(P.pack(t_end=0.3, v_ref=0.4), settings_to_cfg(Settings(), 1, dt),
+        status = pk.run_point(P.pack(t_end=0.3, v_ref=0.4), make_config(Settings(), 1, dt),
                               pk.alloc(), np.empty(pk.n), np.empty(pk.obs_size),
                               np.empty(len(pk.names)), ctr, rec)
         assert status == 0 and ctr[CTR_NREC] == 0

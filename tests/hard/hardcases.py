@@ -2,7 +2,7 @@
 
 Every case is a variation of the Fig. 10 anchor scene (paper Sec. 5.1 parameters, LuGre
 slider, v_ref = 0.4, square-velocity dither W = 0.4 at omega = 1000, tau in [0, t_end],
-from rest; /work/shared/anchors/README.md) with one parameter pushed to an extreme.
+from rest; ../shared/anchors/README.md) with one parameter pushed to an extreme.
 Parameters and the independent references (scipy Radau / DOP853 restarted at every
 switching instant) come from ``references.json``, written by ``scripts/reference_engine.py``
 (which states method, tolerances and the reference's own error ``self_error``).
@@ -100,7 +100,7 @@ def run(c: dict, method: str, rtol: float, max_steps: int, record: bool = True,
     """One trajectory of the case parameters ``c``; q from the recorded switching instants."""
     import time
 
-    scene = Scene(method=method, slow_force=False, outputs=OUTPUTS)
+    scene = Scene(integrator=method, slow_force=False, outputs=OUTPUTS)
     settings = settings_for(rtol, max_steps, atol_units)
     t0 = time.perf_counter()
     sim = simulate(scene, P.pack(**c), settings, record=record,

@@ -16,8 +16,7 @@ import pytest
 
 from engine import params as P
 from engine.api import simulate
-from engine.integrators.problem import CFG_ATOL_I
-from engine.kernels import settings_to_cfg
+from engine.kernels import make_config
 from engine.scene import Scene
 from engine.settings import Settings
 from engine.systems import make_system
@@ -45,8 +44,8 @@ def test_natural_scales_of_the_slider():
 
 
 def test_absolute_units_keep_one_atol_and_bad_units_are_refused():
-    cfg = settings_to_cfg(Settings(atol=3e-9))
-    assert (cfg[CFG_ATOL_I:CFG_ATOL_I + 3] == 3e-9).all()
+    cfg = make_config(Settings(atol=3e-9))
+    assert (cfg[0]["atol_i"][:3] == 3e-9).all()
     with pytest.raises(ValueError, match="atol_units"):
         Settings(atol_units="relative")
     sim = simulate(Scene(outputs=("v_mean",)), P.pack(t_end=1.0, v_ref=0.4, W=0.4, omega=1e3),

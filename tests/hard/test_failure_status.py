@@ -41,7 +41,7 @@ def test_explicit_method_on_the_stiff_case_fails_at_a_budget_the_stiff_one_meets
 def test_block_marks_only_the_points_over_budget():
     """run_block (the sweep entry point): a point that needs more steps than max_steps is
     FAILED with NaN outputs; its neighbour in the same block is OK and finite."""
-    scene = Scene(method="dopri5", slow_force=False, outputs=OUTPUTS)   # kernel shared
+    scene = Scene(integrator="dopri5", slow_force=False, outputs=OUTPUTS)   # kernel shared
     p = P.pack(**{**FIG10, "t_end": 2.0})
     # omega = 1e5 stops at 63662 switches in 2 tau, omega = 1e3 at 637
     points = np.array([[0.4, 1e3, 0.4, 0.1], [0.4, 1e5, 0.4, 0.1]])

@@ -167,7 +167,7 @@ def _dense_mid_error(h, k=1.0):
     dfdt(0.0, y, f0, p, 1.0, h, ft, yt, G, G)
     invert(np.eye(3) / (h * TAB.gamma) - J, Minv)
     attempt(0.0, h, y, f0, ft, True, Minv, p, 1.0, U, yt, r, yn, 1.0, FLOOR_ONE)
-    coeffs(y, yn, U, Q)
+    coeffs(y, yn, (U,), Q)   # mw: the stages first
     dense_eval(y, h, Q, 0.5, ym)
     t = 0.5 * h
     return max(abs(ym[0] - math.cos(t)), abs(ym[1] - math.exp(math.sin(t))),

@@ -50,7 +50,7 @@ def test_rodas4_agrees_with_dopri5(system, friction, dither):
     runs = {}
     for method in ("dopri5", "rodas4"):
         scene = Scene.from_params(p, system=system, friction=friction, dither=dither,
-                                  method=method, outputs=OUTPUTS)
+                                  integrator=method, outputs=OUTPUTS)
         runs[method] = simulate(scene, p, SETTINGS)
     for r in runs.values():
         assert r.status in (S.OK, S.FAILED), S.MEANINGS[r.status]

@@ -18,7 +18,7 @@ from .hardcases import REFS, error_units, run, settings_for
 def test_steps_exactly_onto_every_switch():
     """DESIGN.md §1: the square-wave switches k pi / omega are step ends, bit for bit."""
     c = {**REFS["sigma0_1e6"]["params"], "t_end": 0.05}
-    scene = Scene(method="rodas4", slow_force=False, outputs=("v_mean", "v_slow_p2p", "F_mean"))
+    scene = Scene(integrator="rodas4", slow_force=False, outputs=("v_mean", "v_slow_p2p", "F_mean"))
     sim = simulate(scene, P.pack(**c), settings_for(1e-6, 1e6),
                    record=True)
     assert sim.status == S.OK
