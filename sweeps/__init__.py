@@ -10,7 +10,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     submod_attrs={
         "api": ["open_sweep", "run_sweep"],
         "plan": ["Plan", "make_plan"],
-        "run": ["SubmitResult", "submit"],
+        "outcome": ["SubmitResult"],
+        "run": ["submit"],
         "spec": ["Spec", "SpecError", "load_spec", "parse_spec"],
         "version": ["__version__"],
     },

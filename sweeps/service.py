@@ -272,8 +272,9 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
           progress: bool = False, say=None, dashboard: str | None = None) -> int:
     """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
     (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
+    from .cluster import dask_client
     from .plan import make_plan
-    from .run import dask_client, submit
+    from .run import submit
     from .spec import SpecError, load_spec
 
     say = say or (lambda text: print(text, file=sys.stderr, flush=True))
