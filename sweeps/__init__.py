@@ -12,7 +12,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "plan": ["Plan", "make_plan"],
         "outcome": ["SubmitResult"],
         "run": ["submit"],
-        "spec": ["Spec", "SpecError", "load_spec", "parse_spec"],
+        "spec": ["SpecError", "load_spec", "parse_spec"],
+        "spec_models": ["Spec"],
         "version": ["__version__"],
     },
 )

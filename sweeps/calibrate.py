@@ -17,7 +17,7 @@ from engine import params as P
 
 from . import grid
 from .plan import Plan, make_plan
-from .spec import LEVELS, Spec
+from .spec_models import LEVELS, Spec
 from .task import compute_block, warm_up
 
 CAL_WINDOW = 5.0      # time units integrated per calibration point

@@ -199,7 +199,7 @@ def _step(g: Grid, settings) -> float:
 
 def stability_faults(spec, g: Grid, numerics) -> list[str]:
     """One line when the explicit fixed step is outside its method's stability region."""
-    from .spec import ExplicitAccuracy, is_adaptive
+    from .spec_models import ExplicitAccuracy, is_adaptive
 
     acc = spec.accuracy
     if not isinstance(acc, ExplicitAccuracy) or is_adaptive(numerics.integrator):
@@ -260,7 +260,7 @@ def _periods(g: Grid, t_end: float) -> float:
 
 def option_faults(spec, g: Grid) -> list[str]:
     """rk4's ``steps_per_period`` without dither, ``step`` with dither (module docstring, 1)."""
-    from .spec import ExplicitAccuracy, is_adaptive
+    from .spec_models import ExplicitAccuracy, is_adaptive
 
     acc = spec.accuracy
     if not isinstance(acc, ExplicitAccuracy) or is_adaptive(acc.integrator):
@@ -280,7 +280,7 @@ def option_faults(spec, g: Grid) -> list[str]:
 
 def budget_faults(spec, g: Grid, numerics) -> tuple[list[str], list[str]]:
     """(refusals, warnings) of the step budget (module docstring, 3)."""
-    from .spec import ExplicitAccuracy, is_adaptive
+    from .spec_models import ExplicitAccuracy, is_adaptive
 
     s, name, t_end = numerics.settings, numerics.integrator, spec.time.t_end
     fixed = not is_adaptive(name)
