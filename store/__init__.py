@@ -70,8 +70,8 @@ import lazy_loader as _lazy
 # xarray or matplotlib (a command's start-up time is its imports).
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["attrs", "catalogue", "cube", "header", "journal", "layout", "maps", "query",
-                "status"],
+    submodules=["attrs", "catalogue", "catalogue_db", "cube", "header", "journal", "layout",
+                "lease", "maps", "query", "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],

@@ -35,7 +35,9 @@ import threading
 import time
 
 import store
-from store.catalogue import FINAL, HEARTBEAT_S, STALLED, Catalogue, owner_tag
+from store.catalogue import Catalogue
+from store.catalogue_db import FINAL
+from store.lease import HEARTBEAT_S, STALLED, owner_tag
 
 log = logging.getLogger("ditherlab")
 
