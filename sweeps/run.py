@@ -78,7 +78,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     attach_saved_estimate(sweep, cube)
     todo = blocks_to_run(plan, cube)
     catalogue = store.Catalogue(store_root)
-    if not todo and store.cube.disagreement(sweep.cube, cube) is None \
+    if not todo and store.cube_io.disagreement(sweep.cube, cube) is None \
             and not needs_estimate(plan, sweep, cube):
         return final_result(plan, sweep, catalogue, cube, blocks_run=0, t0=t0, timings={},
                             owner=owner)
@@ -133,14 +133,14 @@ def _check_space(plan: Plan, sweep, cube, todo: list[int]) -> None:
     write and one more copy of the cube fit on the store's disk, counted generously."""
     per_point = sum(v.size for v in cube.data_vars.values()) // cube["status"].size + 1
     need = sum(store.journal.block_bytes(len(plan.blocks[b]), per_point) for b in todo)
-    store.layout.ensure_space(sweep.root, need + store.cube.cube_bytes(cube))
+    store.layout.ensure_space(sweep.root, need + store.cube_io.cube_bytes(cube))
 
 
 def _republish(plan: Plan, sweep, cube) -> None:
     """Publish ``cube`` (rebuilt from the journal), saying so when the published cube
     was missing, unreadable or different (a run killed before its last publish, a
     damaged file)."""
-    why = store.cube.disagreement(sweep.cube, cube) if sweep.cube.exists() else None
+    why = store.cube_io.disagreement(sweep.cube, cube) if sweep.cube.exists() else None
     store.publish(cube, sweep.cube)
     if why:
         log.warning("sweep %s: %s; republished it from the journal", plan.sweep_id, why)

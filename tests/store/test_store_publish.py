@@ -124,7 +124,7 @@ def test_sigkill_mid_publish_leaves_previous_generation(tmp_path, fraction):
 
 def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, tmp_path):
     """What submit compares before it trusts a published cube (issue 10)."""
-    from store.cube import disagreement
+    from store.cube_io import disagreement
 
     path = store.publish(cube, tmp_path / "cube.nc")
     assert disagreement(path, cube) is None
