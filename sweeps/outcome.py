@@ -11,7 +11,7 @@ from pathlib import Path
 
 import store
 
-from . import service
+from .lease import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
 
 log = logging.getLogger("ditherlab")
@@ -50,13 +50,13 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
         state = "partial" if counts["failed_points"] else "done"
         message = (f"{counts['failed_points']} of {n} points failed or went non-finite "
                    "(submit again to retry them)" if counts["failed_points"] else "")
-    elif stopped == service.SHUTDOWN:
+    elif stopped == SHUTDOWN:
         state = "queued"
         message = (f"re-queued after {progress}: serve {lease.owner} stopped; the next "
                    "serve or submit resumes it")
-    elif stopped == service.CANCELLED:
+    elif stopped == CANCELLED:
         state, message = "cancelled", f"cancelled after {progress}; submit again to resume"
-    elif stopped == service.LEASE_LOST:
+    elif stopped == LEASE_LOST:
         state, message = "running", f"another process took the sweep over after {progress}"
     else:
         state = "cancelled"
@@ -64,7 +64,7 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
                    "resume")
     fields = dict(message=message, done_blocks=n_done_blocks, **counts)
     if lease is not None:
-        if stopped != service.LEASE_LOST:
+        if stopped != LEASE_LOST:
             lease.end(state, **fields)
         else:
             lease.close()

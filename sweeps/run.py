@@ -26,12 +26,15 @@ import numpy as np
 
 import store
 from engine import status as S
+from store.catalogue_db import FINAL
 
-from . import history, service
+from . import history
 from .cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
+from .lease import LEASE_LOST, Lease
 from .outcome import SubmitResult, abort, attached_result, final_result
 from .plan import Plan
+from .progress import attach
 from .run_estimate import attach_saved_estimate, needs_estimate
 from .sink import BlockSink
 from .version import results_fingerprint
@@ -107,7 +110,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         if todo or needs_estimate(plan, sweep, cube):
             run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
                 timings=timings, client=client, dashboard=dashboard)
-        if sink.stopped != service.LEASE_LOST:   # else the new holder publishes
+        if sink.stopped != LEASE_LOST:   # else the new holder publishes
             store.publish(cube, sweep.cube)
     except BaseException as exc:
         abort(plan, sink, lease, exc, serving=stop is not None)
@@ -150,11 +153,11 @@ def _take_lease(plan: Plan, catalogue, owner, stop, progress):
     """``(Lease, None)`` once this process holds the sweep, or ``(None, row)`` with the
     final row of the run it attached to."""
     while True:
-        lease, row = service.Lease.take(catalogue, plan.sweep_id, owner, stop)
+        lease, row = Lease.take(catalogue, plan.sweep_id, owner, stop)
         if lease is not None:
             return lease, None
-        row = service.attach(catalogue, plan.sweep_id, progress=progress)
-        if row["state"] in service.FINAL:
+        row = attach(catalogue, plan.sweep_id, progress=progress)
+        if row["state"] in FINAL:
             return None, row
         # queued again (a serve stopped) or stalled (the holder died): take it over
         if progress:

@@ -11,7 +11,7 @@ import numpy as np
 import store
 from engine import status as S
 
-from . import service
+from .lease import LEASE_LOST
 from .plan import Plan
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running
@@ -32,7 +32,7 @@ class BlockSink:
         self.last_publish = time.monotonic()
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
-        self.stopped: str | None = None              # service.CANCELLED / SHUTDOWN / ...
+        self.stopped: str | None = None              # sweeps.lease.CANCELLED / SHUTDOWN / ...
         self._report(force=True)
 
     def __call__(self, b: int, result: dict) -> None:
@@ -45,7 +45,7 @@ class BlockSink:
         self.done.add(b)
         self.blocks_run += 1
         if time.monotonic() - self.last_publish > PUBLISH_EVERY_S and \
-                self.stopped != service.LEASE_LOST:
+                self.stopped != LEASE_LOST:
             store.publish(self.cube, self.sweep.cube)
             self.last_publish = time.monotonic()
         self._report()
