@@ -58,9 +58,9 @@ query
     ``select``; labels ``STABLE, PU, SU, NO_DATA``.
 maps
     ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
-layout / attrs
-    ``SweepDir(store_root, sweep_id)``, ``default_store()``, ``atomic_write``;
-    ``canonical_json``, ``decode_attr``.
+layout / atomic / errors / attrs
+    ``SweepDir(store_root, sweep_id)``, ``default_store()``; ``atomic_write``;
+    ``store.errors.StoreError`` and its kinds; ``canonical_json``, ``decode_attr``.
 """
 
 import lazy_loader as _lazy
@@ -69,8 +69,8 @@ import lazy_loader as _lazy
 # xarray or matplotlib (a command's start-up time is its imports).
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["attrs", "catalogue", "catalogue_db", "cube", "cube_io", "header", "journal",
-                "layout", "lease", "maps", "points", "query", "status"],
+    submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "errors",
+                "header", "journal", "layout", "lease", "maps", "points", "query", "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
@@ -78,7 +78,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "cube_io": ["open_cube", "publish"],
         "header": ["read_header"],
         "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
-        "layout": ["SweepDir", "atomic_write", "default_store"],
+        "atomic": ["atomic_write"],
+        "layout": ["SweepDir", "default_store"],
         "points": ["fill", "grid_points", "pending_index", "status_counts"],
         "maps": ["FORMATS", "figure_format", "friction_curves", "stability_map",
                  "stick_slip_map"],

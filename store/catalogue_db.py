@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from . import attrs as A
-from .layout import NoSpaceError, StoreError
+from .errors import NoSpaceError, StoreError
 from .status import FAILED, NON_FINITE, NOT_COMPUTED
 
 STATES = ("queued", "running", "done", "partial", "failed", "cancelled")

@@ -13,8 +13,10 @@ import numpy as np
 import xarray as xr
 
 from . import attrs as A
+from .atomic import atomic_write, remove_stale_temps
 from .cube import AXES
-from .layout import SPEC_NAME, StoreError, atomic_write, remove_stale_temps
+from .errors import StoreError
+from .layout import SPEC_NAME
 
 COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
 

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .layout import atomic_write, remove_stale_temps
+from .atomic import atomic_write, remove_stale_temps
 from .points import fill
 
 FIELDS = {

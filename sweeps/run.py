@@ -136,7 +136,7 @@ def _check_space(plan: Plan, sweep, cube, todo: list[int]) -> None:
     write and one more copy of the cube fit on the store's disk, counted generously."""
     per_point = sum(v.size for v in cube.data_vars.values()) // cube["status"].size + 1
     need = sum(store.journal.block_bytes(len(plan.blocks[b]), per_point) for b in todo)
-    store.layout.ensure_space(sweep.root, need + store.cube_io.cube_bytes(cube))
+    store.errors.ensure_space(sweep.root, need + store.cube_io.cube_bytes(cube))
 
 
 def _republish(plan: Plan, sweep, cube) -> None:
