@@ -82,7 +82,7 @@ class Catalogue(LeaseMixin):
         Read a snapshot of the catalogue copied into memory and never write the store
         (writes go to the copy). Default: when the store folder exists but is not
         writable (a read-only mount), so ``status``, ``query`` and ``map`` work there.
-        A damaged catalogue raises ``store.layout.StoreError`` saying what to do.
+        A damaged catalogue raises ``store.errors.StoreError`` saying what to do.
     """
 
     def __init__(self, store_root, timeout_s: float = 30.0, readonly: bool | None = None):

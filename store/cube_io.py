@@ -53,7 +53,7 @@ def publish(ds: xr.Dataset, path) -> Path:
     made in memory first, so HDF5 never meets a full disk (which it survives badly: a
     failed flush inside HDF5 can end the process with a segmentation fault); free space
     is checked before the temporary file is written, and a full disk raises
-    ``store.layout.NoSpaceError`` with the previous cube untouched. Temporary files of
+    ``store.errors.NoSpaceError`` with the previous cube untouched. Temporary files of
     dead writers in the same folder are removed first. Returns ``path``.
     """
     path = Path(path)

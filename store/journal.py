@@ -154,7 +154,7 @@ class Journal:
 
     def write(self, block_id: int, payload: Mapping[str, np.ndarray]) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
-        checksum. Free space is checked first (``store.layout.NoSpaceError``).
+        checksum. Free space is checked first (``store.errors.NoSpaceError``).
 
         Writing a block again replaces it. Returns the file's path.
         """

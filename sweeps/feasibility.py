@@ -9,7 +9,7 @@ ok and wrong numbers.
    divides each dither (half-)period into ``steps_per_period`` steps and ignores ``step``;
    without dither (``dither = "none"`` or ``W = 0`` everywhere) it takes ``step`` and
    ignores ``steps_per_period``. (rtol/atol for rk4, step/steps_per_period for adaptive
-   methods are refused by :class:`sweeps.spec.ExplicitAccuracy` itself.)
+   methods are refused by :class:`sweeps.spec_models.ExplicitAccuracy` itself.)
 
 2. **Stability of a fixed step.** On the linear test equation ``y' = lambda y`` a
    Runge-Kutta step multiplies ``y`` by ``R(h lambda)``, ``R(z) = 1 + z b^T (I - z A)^-1 1``

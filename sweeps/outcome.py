@@ -106,7 +106,7 @@ def abort(plan, sink, lease, exc: BaseException, *, serving: bool) -> None:
     if sink is not None:
         try:
             store.publish(sink.cube, sink.sweep.cube)
-        except store.layout.NoSpaceError:
+        except store.errors.NoSpaceError:
             pass   # the previous cube stays whole; the error itself is reported
         except Exception as err:  # noqa: BLE001 -- the journal keeps the blocks anyway
             log.warning("could not publish the cube after the run stopped: %s", err)
@@ -122,6 +122,6 @@ def abort(plan, sink, lease, exc: BaseException, *, serving: bool) -> None:
             lease.end("cancelled", message=(f"interrupted after {progress}; submit again to "
                                             "resume"), **counts)
     except Exception as err:  # noqa: BLE001 -- do not hide the original error
-        if not isinstance(exc, store.layout.NoSpaceError):   # SQLite is out of space too
+        if not isinstance(exc, store.errors.NoSpaceError):   # SQLite is out of space too
             log.warning("could not record the stop of sweep %s: %s", plan.sweep_id, err)
         lease.close()

@@ -132,7 +132,7 @@ def _checked_blocks(plan: Plan):
 
 
 def _check_space(plan: Plan, sweep, cube, todo: list[int]) -> None:
-    """Refuse to start (``store.layout.NoSpaceError``) unless the journal blocks still to
+    """Refuse to start (``store.errors.NoSpaceError``) unless the journal blocks still to
     write and one more copy of the cube fit on the store's disk, counted generously."""
     per_point = sum(v.size for v in cube.data_vars.values()) // cube["status"].size + 1
     need = sum(store.journal.block_bytes(len(plan.blocks[b]), per_point) for b in todo)
