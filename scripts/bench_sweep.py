@@ -19,8 +19,9 @@ import tempfile
 import time
 
 from sweeps.plan import make_plan
-from sweeps.run import compute_block, submit, warm_up
+from sweeps.run import submit
 from sweeps.spec import parse_spec
+from sweeps.task import compute_block, warm_up
 
 
 def bench_spec(n_w: int, n_omega: int, n_vref: int, t_end: float, block_size=None) -> dict:

@@ -47,12 +47,12 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import store  # noqa: E402
-from sweeps import run as sweeps_run  # noqa: E402
+from sweeps import task as sweeps_task  # noqa: E402
 from sweeps.plan import make_plan  # noqa: E402
 from sweeps.spec import load_spec  # noqa: E402
 
 BIN = Path(sys.executable).parent / "ditherlab"
-BLOCK_LOG_ENV = getattr(sweeps_run, "BLOCK_LOG_ENV", None)
+BLOCK_LOG_ENV = getattr(sweeps_task, "BLOCK_LOG_ENV", None)
 
 # 16 one-point blocks of ~0.5 s each: a whole run takes ~25 s here, so kills land in every
 # phase (cluster start, warm-up, blocks, error estimate, final publish)
@@ -345,7 +345,7 @@ def campaign(spec_text: str, work: Path, n_submit: int, n_serve: int, seed: int 
     spec_path = work / "spec.toml"
     spec_path.write_text(spec_text)
     plan = make_plan(load_spec(spec_path))
-    keys = {sweeps_run.block_key(plan.scene, plan.block_points(b), plan.numerics.settings)
+    keys = {sweeps_task.block_key(plan.scene, plan.block_points(b), plan.numerics.settings)
             for b in range(len(plan.blocks))} if BLOCK_LOG_ENV else set()
     t0 = time.monotonic()
     clean = work / "clean"

@@ -48,7 +48,8 @@ from engine import status as S
 from engine.batch import run_block
 from engine.settings import Settings
 from sweeps.plan import make_plan
-from sweeps.spec import LEVELS, parse_spec
+from sweeps.spec import parse_spec
+from sweeps.spec_models import LEVELS
 
 DOCS = ROOT / "docs"
 RESULTS = DOCS / "work_precision.json"

@@ -40,13 +40,12 @@ and how a user reads it::
 
 Public API
 ----------
-cube
+cube / points / cube_io
     ``AXES``; ``empty_cube(coords, variables, attrs=None, axis_units=None,
-    axis_long_names=None) -> Dataset``; ``fill(ds, flat_index, values, status, cost_s,
-    steps, evals)``; ``publish(ds, path) -> Path``; ``open_cube(path) -> Dataset``;
-    ``grid_points(ds, flat_index=None) -> (n, 4)``; ``pending_index(ds)``;
-    ``status_counts(ds)``; ``output_names(ds)``; status codes ``OK, NOT_COMPUTED,
-    FAILED, NON_FINITE``.
+    axis_long_names=None) -> Dataset``; ``output_names(ds)``; ``fill(ds, flat_index,
+    values, status, cost_s, steps, evals)``; ``grid_points(ds, flat_index=None) -> (n, 4)``;
+    ``pending_index(ds)``; ``status_counts(ds)``; ``publish(ds, path) -> Path``;
+    ``open_cube(path) -> Dataset``; status codes ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
 journal
     ``Journal(folder)`` with ``.write(block_id, payload)``, ``.done() -> set[int]``,
     ``.read() -> Iterator[(block_id, payload)]``; ``block_payload(...)``;
@@ -59,9 +58,9 @@ query
     ``select``; labels ``STABLE, PU, SU, NO_DATA``.
 maps
     ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
-layout / attrs
-    ``SweepDir(store_root, sweep_id)``, ``default_store()``, ``atomic_write``;
-    ``canonical_json``, ``decode_attr``.
+layout / atomic / errors / attrs
+    ``SweepDir(store_root, sweep_id)``, ``default_store()``; ``atomic_write``;
+    ``store.errors.StoreError`` and its kinds; ``canonical_json``, ``decode_attr``.
 """
 
 import lazy_loader as _lazy
@@ -70,16 +69,18 @@ import lazy_loader as _lazy
 # xarray or matplotlib (a command's start-up time is its imports).
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["attrs", "catalogue", "cube", "header", "journal", "layout", "maps", "query",
-                "status"],
+    submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "errors",
+                "header", "journal", "layout", "lease", "maps", "points", "query", "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
-        "cube": ["AXES", "empty_cube", "fill", "grid_points", "open_cube", "output_names",
-                 "pending_index", "publish", "status_counts"],
+        "cube": ["AXES", "empty_cube", "output_names"],
+        "cube_io": ["open_cube", "publish"],
         "header": ["read_header"],
         "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
-        "layout": ["SweepDir", "atomic_write", "default_store"],
+        "atomic": ["atomic_write"],
+        "layout": ["SweepDir", "default_store"],
+        "points": ["fill", "grid_points", "pending_index", "status_counts"],
         "maps": ["FORMATS", "figure_format", "friction_curves", "stability_map",
                  "stick_slip_map"],
         "query": ["NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select",

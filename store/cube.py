@@ -15,22 +15,22 @@ flat indices into ``(n, 4)`` parameter rows in the column order of ``AXES``.
 
 On disk it is one HDF5/netCDF4 file written by ``publish`` (zlib, atomic rename) and
 readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
+
+This module holds the layout (axes, bookkeeping variables, attributes) and builds an empty
+cube; addressing and filling points is :mod:`store.points`, publishing and opening the
+file :mod:`store.cube_io`.
 """
 
 from __future__ import annotations
 
 import importlib.metadata
-import sys
 from collections.abc import Mapping
-from contextlib import nullcontext
 from datetime import datetime, timezone
-from pathlib import Path
 
 import numpy as np
 import xarray as xr
 
 from . import attrs as A
-from .layout import SPEC_NAME, StoreError, atomic_write, remove_stale_temps
 from .status import FAILED, NON_FINITE, NOT_COMPUTED, OK, STATUS_MEANINGS  # noqa: F401
 
 AXES = ("W", "omega", "v_ref", "v_d")
@@ -50,7 +50,6 @@ BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
 PROVENANCE = "provenance"
 PROVENANCE_MEANINGS = ("computed", "inferred", "not_yet_decided")
 RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index", PROVENANCE}
-COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
 
 
 def _check_axis(name: str, values) -> np.ndarray:
@@ -202,214 +201,3 @@ def add_provenance(ds: xr.Dataset) -> None:
 def shape_of(ds: xr.Dataset) -> tuple[int, ...]:
     """Grid shape in ``AXES`` order."""
     return tuple(int(ds.sizes[a]) for a in AXES)
-
-
-def check_index(ds: xr.Dataset, flat_index) -> np.ndarray:
-    """``flat_index`` as a 1-D int64 array, after checking it addresses points of ``ds``."""
-    idx = np.asarray(flat_index)
-    size = int(np.prod(shape_of(ds)))
-    if idx.ndim != 1 or (idx.size and not np.issubdtype(idx.dtype, np.integer)):
-        raise ValueError(
-            f"flat_index must be a 1-D integer array, got dtype {idx.dtype} shape {idx.shape}"
-        )
-    if idx.size and (idx.min() < 0 or idx.max() >= size):
-        raise ValueError(
-            f"flat_index must lie in [0, {size}) for a cube of shape {shape_of(ds)}, "
-            f"got range [{idx.min()}, {idx.max()}]"
-        )
-    return idx.astype(np.int64)
-
-
-def grid_points(ds: xr.Dataset, flat_index=None) -> np.ndarray:
-    """Parameter rows ``(n, 4)`` float64 of the points ``flat_index`` (all by default).
-
-    Columns follow ``AXES`` (the engine's ``POINT_AXES`` order: W, omega, v_ref, vd).
-    """
-    size = int(np.prod(shape_of(ds)))
-    idx = np.arange(size) if flat_index is None else check_index(ds, flat_index)
-    multi = np.unravel_index(idx, shape_of(ds))
-    return np.column_stack([ds[a].values[m] for a, m in zip(AXES, multi)]).astype(np.float64)
-
-
-def pending_index(ds: xr.Dataset) -> np.ndarray:
-    """Flat indices of the points whose status is not ok (to resume a sweep)."""
-    return np.flatnonzero(ds["status"].values.reshape(-1) != OK)
-
-
-def status_counts(ds: xr.Dataset) -> dict[str, int]:
-    """Number of points per status meaning, e.g. ``{"ok": 90, "not_yet_computed": 10, ...}``."""
-    counts = np.bincount(
-        ds["status"].values.reshape(-1).astype(np.int64), minlength=len(STATUS_MEANINGS)
-    )
-    return {m: int(c) for m, c in zip(STATUS_MEANINGS, counts)}
-
-
-def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarray]:
-    outputs = output_names(ds)
-    missing, extra = sorted(set(outputs) - set(values)), sorted(set(values) - set(outputs))
-    if missing or extra:
-        raise ValueError(
-            f"fill: values must have exactly the cube's outputs {outputs}; missing {missing}, unknown {extra}"
-        )
-    columns = {**values, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
-    columns = {k: np.asarray(v) for k, v in columns.items()}
-    for name, col in columns.items():
-        expected = (n,) + tuple(ds[name].shape[len(AXES):])
-        if col.shape != expected:
-            raise ValueError(f"fill: {name} has shape {col.shape}, expected {expected} "
-                             "like flat_index")
-    bad = ~np.isin(columns["status"], np.arange(len(STATUS_MEANINGS)))
-    if bad.any():
-        raise ValueError(
-            f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got {np.unique(columns['status'][bad]).tolist()}"
-        )
-    return columns
-
-
-def fill(
-    ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
-) -> None:
-    """Write the results of some points into ``ds`` in place.
-
-    Parameters
-    ----------
-    ds
-        A cube from ``empty_cube`` or ``open_cube`` (in memory).
-    flat_index
-        ``(n,)`` int, C-order flat indices over ``AXES``.
-    values
-        Output name -> ``(n,)`` float; exactly the cube's outputs.
-    status
-        ``(n,)`` int codes 0..3; ``cost_s`` ``(n,)`` seconds; ``steps``, ``evals`` ``(n,)`` int.
-
-    Everything is checked before anything is written, so a refused call leaves ``ds``
-    unchanged.
-    """
-    idx = check_index(ds, flat_index)
-    columns = _columns(ds, idx.size, values, status, cost_s, steps, evals)
-    for name, col in columns.items():
-        var = ds.variables[name]
-        var.load()  # numpy-backed from here on, so writes go into the dataset itself
-        flat = var.data.reshape((-1,) + var.shape[len(AXES):])   # a view: points first
-        flat[idx] = col
-
-
-def _check_layout(ds: xr.Dataset, where: str) -> None:
-    if not set(AXES) <= set(ds.dims) or "status" not in ds \
-            or any(a not in ds.coords for a in AXES):
-        raise ValueError(
-            f"{where}: not a ditherlab cube: dims {tuple(ds.dims)} (expected {AXES}), "
-            f"variables {list(ds.data_vars)} (expected 'status' among them)"
-        )
-    for name, var in ds.data_vars.items():
-        if var.dims[:len(AXES)] != AXES or len(var.dims) > len(AXES) + 1:
-            raise ValueError(f"{where}: variable {name!r} has dims {var.dims}, expected {AXES} "
-                             "(and at most one extra trailing dimension)")
-
-
-def _encoding(ds: xr.Dataset) -> dict[str, dict]:
-    enc = {}
-    for name, var in ds.data_vars.items():
-        enc[name] = dict(COMPRESSION)
-        if np.issubdtype(var.dtype, np.integer):
-            enc[name]["_FillValue"] = (
-                None  # with a fill value xarray decodes int8 as float (pydata/xarray#1576)
-            )
-    return enc
-
-
-def publish(ds: xr.Dataset, path) -> Path:
-    """Write ``ds`` to ``path`` atomically (temporary file, fsync, rename, fsync folder).
-
-    A reader of ``path`` sees the previous file or the new one, never a torn file; a
-    writer killed before the rename leaves the old file intact. The netCDF image is
-    made in memory first, so HDF5 never meets a full disk (which it survives badly: a
-    failed flush inside HDF5 can end the process with a segmentation fault); free space
-    is checked before the temporary file is written, and a full disk raises
-    ``store.layout.NoSpaceError`` with the previous cube untouched. Temporary files of
-    dead writers in the same folder are removed first. Returns ``path``.
-    """
-    path = Path(path)
-    _check_layout(ds, f"publish({path})")
-    out = ds.copy(deep=False)
-    for var in out.variables.values():
-        var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
-    if path.parent.exists():
-        remove_stale_temps(path.parent)
-    with _local_writes():
-        image = out.to_netcdf(engine="h5netcdf", encoding=_encoding(out))
-    return atomic_write(path, image)
-
-
-def _local_writes():
-    """xarray takes a dask.distributed lock for every netCDF write while a distributed
-    ``Client`` is dask's default scheduler (a user's ``Client(cluster)`` is), and for an
-    in-memory image that lock fails ("Semaphore or Lock ... not known"). A cube is
-    numpy-backed, so dask's synchronous scheduler is right. ``store`` never imports dask:
-    this only configures it when something else already has."""
-    dask = sys.modules.get("dask")
-    return dask.config.set(scheduler="synchronous") if dask is not None else nullcontext()
-
-
-def cube_bytes(ds: xr.Dataset) -> int:
-    """A generous size of ``ds`` as a published file: its values uncompressed plus
-    HDF5's metadata (for free-space checks before a run)."""
-    return int(sum(v.nbytes for v in ds.variables.values())) + 64 * 1024 + 2048 * len(ds.variables)
-
-
-class CubeError(StoreError, ValueError):
-    """A cube file that cannot be read; the message says how to repair it."""
-
-
-def open_cube(path) -> xr.Dataset:
-    """Read a cube fully into memory and close the file (read-only; works on a read-only
-    store).
-
-    Raises
-    ------
-    FileNotFoundError
-        If there is no file at ``path``.
-    CubeError
-        (a ``ValueError``) if the file is unreadable or not a ditherlab cube (dims other
-        than ``AXES``, no ``status``); the message names the command that republishes
-        it from the sweep's journal.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no cube at {path}; has the sweep been published yet?")
-    try:
-        with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
-            ds = f.load()
-        _check_layout(ds, f"open_cube({path})")
-    except (OSError, KeyError, ValueError, RuntimeError) as err:  # h5py: a torn file raises
-        spec = path.parent / SPEC_NAME
-        how = (f" (ditherlab submit {spec} --store {path.parent.parent})"
-               if spec.exists() else "")
-        text = f"{type(err).__name__}: {err}".replace("\n", " ")
-        raise CubeError(
-            f"the cube at {path} is unreadable ({text[:160]}); submit the spec again{how} "
-            "to republish it from the journal"
-        ) from err
-    return ds
-
-
-def disagreement(path, ds: xr.Dataset) -> str | None:
-    """``None`` if the published cube at ``path`` holds exactly ``ds`` (every variable
-    and coordinate, and ``ds``'s attributes but ``created``; attributes only the file has
-    are kept), else why not, in a few words."""
-    try:
-        pub = open_cube(path)
-    except FileNotFoundError:
-        return "the cube is missing"
-    except CubeError as err:
-        return f"the cube is unreadable ({err.__cause__})"
-    if set(pub.variables) != set(ds.variables):
-        return "the cube has other variables than the journal's"
-    for name, var in ds.variables.items():
-        if not var.equals(pub.variables[name]):
-            return f"the cube's {name} differs from the journal's"
-    keys = [k for k in ds.attrs if k != A.CREATED]
-    attrs = [A.canonical_json(A.encode({k: d.attrs.get(k) for k in keys})) for d in (ds, pub)]
-    if attrs[0] != attrs[1]:
-        return "the cube's attributes differ from the journal's"
-    return None

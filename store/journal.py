@@ -21,7 +21,7 @@ evals      int64    right-hand-side evaluations per point
                     vector output such as ``alpha_hist``)
 =========  =======  ==========================================
 
-``block_payload`` builds it from the same arguments as ``store.cube.fill``.
+``block_payload`` builds it from the same arguments as ``store.points.fill``.
 
 Every block file also holds ``_sha256``: the SHA-256 of its block id and of each
 array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes,
@@ -48,8 +48,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .cube import fill
-from .layout import atomic_write, remove_stale_temps
+from .atomic import atomic_write, remove_stale_temps
+from .points import fill
 
 FIELDS = {
     "index": np.int64,
@@ -74,7 +74,7 @@ class BadBlock(ValueError):
 def block_payload(
     flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
 ) -> dict[str, np.ndarray]:
-    """A journal payload from the arguments of ``store.cube.fill`` (see module doc)."""
+    """A journal payload from the arguments of ``store.points.fill`` (see module doc)."""
     payload = {
         "index": flat_index,
         "status": status,
@@ -154,7 +154,7 @@ class Journal:
 
     def write(self, block_id: int, payload: Mapping[str, np.ndarray]) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
-        checksum. Free space is checked first (``store.layout.NoSpaceError``).
+        checksum. Free space is checked first (``store.errors.NoSpaceError``).
 
         Writing a block again replaces it. Returns the file's path.
         """
@@ -255,7 +255,7 @@ def _warn(message: str) -> None:
 
 
 def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
-    """``store.cube.fill`` from a journal payload."""
+    """``store.points.fill`` from a journal payload."""
     values = {k: v for k, v in payload.items() if k not in FIELDS}
     fill(
         ds,

@@ -9,14 +9,14 @@ A store is one folder::
 
 The store root defaults to ``$DITHERLAB_STORE`` or ``./ditherlab-store`` (DESIGN.md §5).
 
-``atomic_write`` is the one crash-safe write used by the cube and the journal
-(DESIGN.md §4): write to a temporary name in the destination folder, flush and
+``atomic_write`` (store.atomic) is the one crash-safe write used by the cube and the
+journal (DESIGN.md §4): write to a temporary name in the destination folder, flush and
 fsync it, ``os.replace`` it onto the final name, fsync the folder. A reader sees
 the old file or the new one, never a torn one; a writer killed before the rename
 leaves only a temporary file, which ``remove_stale_temps`` deletes later.
 
-Faults a user can meet are ``StoreError``s, each one line that says what to do:
-``NoSpaceError`` (disk full: checked before writing, and ENOSPC/EDQUOT while
+Faults a user can meet are ``StoreError``s (store.errors), each one line that says
+what to do: ``NoSpaceError`` (disk full: checked before writing, and ENOSPC/EDQUOT while
 writing), ``check_store`` (a store path that is a file, a name too long, a
 read-only store asked to take writes). ``exit_status`` says which exit status the
 command line gives (README: 1 a run failed, 2 input refused).
@@ -26,44 +26,10 @@ from __future__ import annotations
 
 import errno
 import os
-import secrets
-from collections.abc import Callable
-from contextlib import suppress
 from pathlib import Path
 
-MB = 1 << 20
-SPACE_MARGIN = 64 << 10   # keep this much free beyond a write (file-system metadata, SQLite)
-
-
-class StoreError(Exception):
-    """A store problem told to the user as one line (no traceback)."""
-
-    exit_status = 1
-
-
-class StorePathError(StoreError):
-    """The store path itself is unusable (a file, a name too long): input refused."""
-
-    exit_status = 2
-
-
-class NoSpaceError(StoreError, OSError):
-    """Not enough free space to write ``path``; nothing was replaced.
-
-    ``needed`` and ``free`` are bytes (``needed`` may be 0 when the file system said
-    ENOSPC without a size known in advance).
-    """
-
-    def __init__(self, path, needed: int = 0, free: int | None = None):
-        self.path, self.needed = Path(path), int(needed)
-        self.free = free_bytes(self.path) if free is None else int(free)
-        short = max(self.needed + SPACE_MARGIN - self.free, MB // 10)
-        self.short_mb = short / MB
-        super().__init__(errno.ENOSPC, f"no space left on device writing {self.path}: "
-                         f"free {self.short_mb:.1f} MB and submit again")
-
-    def __str__(self) -> str:
-        return self.strerror
+from .atomic import atomic_write, temp_name
+from .errors import NoSpaceError, StoreError, StorePathError
 
 CATALOGUE_NAME = "catalogue.sqlite"
 CUBE_NAME = "cube.nc"
@@ -72,7 +38,6 @@ JOURNAL_DIR = "journal"
 SPEC_NAME = "spec.json"
 ENV_STORE = "DITHERLAB_STORE"
 DEFAULT_STORE = "ditherlab-store"
-TEMP_MARK = ".tmp-"
 
 
 def default_store() -> Path:
@@ -133,95 +98,6 @@ class SweepDir:
         return atomic_write(self.spec, lambda tmp: tmp.write_text(spec_json, encoding="utf-8"))
 
 
-def temp_name(path: Path) -> Path:
-    """A fresh temporary name next to ``path``: ``.<name>.tmp-<pid>-<random>``.
-
-    The leading dot hides it from ``*/cube.nc`` and ``block-*.npz`` globs; the pid
-    lets ``remove_stale_temps`` tell a dead writer's leftover from a live one's.
-    """
-    path = Path(path)
-    return path.with_name(f".{path.name}{TEMP_MARK}{os.getpid()}-{secrets.token_hex(4)}")
-
-
-def fsync_dir(folder: Path) -> None:
-    """fsync a folder so that a rename inside it survives a power cut (POSIX)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:  # pragma: no cover - platforms without directory fds
-        return
-    try:
-        with suppress(OSError):
-            os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def fsync_file(path: Path) -> None:
-    """fsync a file that a library (h5py) has already written and closed."""
-    fd = os.open(path, os.O_RDWR)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-def atomic_write(path: Path, write: Callable[[Path], None] | bytes | memoryview) -> Path:
-    """Create ``path`` atomically: write a temporary file, fsync, rename, fsync the folder.
-
-    Parameters
-    ----------
-    path
-        Final file name; its folder is created if missing.
-    write
-        The file's bytes, or a function called with the temporary path that must
-        create and close that file. Given bytes, free space is checked first.
-
-    Returns
-    -------
-    Path
-        ``path``. If the write fails, the temporary file is removed and the old
-        ``path`` (if any) is untouched; a full disk raises ``NoSpaceError``.
-    """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if not callable(write):
-        data = write
-        ensure_space(path, len(data))
-        write = lambda tmp: tmp.write_bytes(data)  # noqa: E731
-    tmp = temp_name(path)
-    try:
-        write(tmp)
-        fsync_file(tmp)
-        os.replace(tmp, path)
-    except BaseException as err:
-        with suppress(OSError):
-            tmp.unlink()
-        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT) \
-                and not isinstance(err, NoSpaceError):
-            raise NoSpaceError(path) from err
-        raise
-    fsync_dir(path.parent)
-    return path
-
-
-def free_bytes(path) -> int:
-    """Bytes free to an unprivileged writer on the file system holding ``path`` (or its
-    nearest existing parent)."""
-    path = Path(path).absolute()
-    while not path.exists() and path != path.parent:
-        path = path.parent
-    st = os.statvfs(path)
-    return st.f_bavail * st.f_frsize
-
-
-def ensure_space(path, needed: int) -> None:
-    """Raise ``NoSpaceError`` unless ``needed`` bytes (plus ``SPACE_MARGIN``) are free
-    where ``path`` lives; called before writing, so nothing is torn or replaced."""
-    free = free_bytes(path)
-    if free < needed + SPACE_MARGIN:
-        raise NoSpaceError(path, needed, free)
-
-
 def check_store(root, write: bool) -> Path:
     """The store folder ``root`` checked for use, as a ``Path``.
 
@@ -273,31 +149,3 @@ def writable(folder) -> bool:
 def _short(path: Path, width: int = 80) -> str:
     text = str(path)
     return text if len(text) <= width else f"{text[:width // 2]}...{text[-width // 2:]}"
-
-
-def _pid_alive(pid: int) -> bool:
-    if pid == os.getpid():
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:  # exists, owned by someone else
-        return True
-    return True
-
-
-def remove_stale_temps(folder: Path) -> list[Path]:
-    """Delete temporary files in ``folder`` whose writing process is gone.
-
-    Returns the removed paths. Files of a live process (this one included) and
-    names that do not parse are left alone, so a concurrent writer is never hurt.
-    """
-    removed = []
-    for tmp in Path(folder).glob(f".*{TEMP_MARK}*"):
-        pid_text = tmp.name.rsplit(TEMP_MARK, 1)[1].split("-", 1)[0]
-        if pid_text.isdigit() and not _pid_alive(int(pid_text)):
-            with suppress(OSError):
-                tmp.unlink()
-                removed.append(tmp)
-    return removed

@@ -10,8 +10,10 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     submod_attrs={
         "api": ["open_sweep", "run_sweep"],
         "plan": ["Plan", "make_plan"],
-        "run": ["SubmitResult", "submit"],
-        "spec": ["Spec", "SpecError", "load_spec", "parse_spec"],
+        "outcome": ["SubmitResult"],
+        "run": ["submit"],
+        "spec": ["SpecError", "load_spec", "parse_spec"],
+        "spec_models": ["Spec"],
         "version": ["__version__"],
     },
 )

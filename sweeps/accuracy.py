@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from engine.settings import Settings
 
-from .spec import ExplicitAccuracy, Spec
+from .spec_models import ExplicitAccuracy, Spec
 
 # error each level promises in the queried outputs (relative; absolute for time fractions)
 TARGET_ERROR = {"draft": 1e-2, "standard": 1e-4, "reference": 1e-7}

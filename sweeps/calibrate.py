@@ -17,8 +17,8 @@ from engine import params as P
 
 from . import grid
 from .plan import Plan, make_plan
-from .run import compute_block, warm_up
-from .spec import LEVELS, Spec
+from .spec_models import LEVELS, Spec
+from .task import compute_block, warm_up
 
 CAL_WINDOW = 5.0      # time units integrated per calibration point
 MAX_SAMPLES = 5

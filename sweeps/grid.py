@@ -13,7 +13,7 @@ import numpy as np
 
 from engine import params as P
 
-from .spec import AXES, Range, Spec
+from .spec_models import AXES, Range, Spec
 
 # the engine parameter each cube axis overrides
 AXIS_PARAM = {"W": "W", "omega": "omega", "v_ref": "v_ref", "v_d": "vd"}

@@ -21,7 +21,7 @@ def _load(root: Path) -> dict:
 
 
 def _save(root: Path, data: dict) -> None:
-    from store.layout import atomic_write
+    from store.atomic import atomic_write
 
     atomic_write(Path(root) / FILE, lambda tmp: tmp.write_text(json.dumps(data, indent=1)))
 

@@ -21,7 +21,7 @@ from engine.scene import Scene
 from . import grid
 from .accuracy import Numerics, numerics
 from .outputs import resolve_outputs
-from .spec import Spec
+from .spec_models import Spec
 
 # Points per block when the spec does not say: about MIN_BLOCKS blocks, clamped to
 # [lo, hi] points. Each block costs ~7 ms of scheduling and journaling beside its compute

@@ -20,9 +20,11 @@ import numpy as np
 import store
 from engine import status as S
 
-from . import run as R
+from .cluster import dask_client
+from .dispatch import run_blocks, run_blocks_local
 from .plan import Plan, balanced_blocks, point_costs
 from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
+from .run_estimate import estimate_into, needs_estimate
 
 BLOCK_POINTS = {"simulate": 8, "averaged": 4096}   # points per block of a level (at most)
 
@@ -89,9 +91,9 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
     simulate = plan.path == "simulate"
     own = simulate and client is None
     t = time.perf_counter()
-    with (R.dask_client(scheduler, workers, dashboard) if own else nullcontext(client)) as c:
+    with (dask_client(scheduler, workers, dashboard) if own else nullcontext(client)) as c:
         timings["cluster_s"] = time.perf_counter() - t
-        blocks = R._run_blocks if simulate or scheduler else R._run_blocks_local
+        blocks = run_blocks if simulate or scheduler else run_blocks_local
         t, level = time.perf_counter(), 0
         while todo:
             blocks(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
@@ -100,5 +102,5 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
                 return
             todo, level = _advance(plan, sink.cube), level + 1
         timings["compute_s"] = time.perf_counter() - t
-        if simulate and R._needs_estimate(plan, sink.sweep, sink.cube):
-            R.estimate_into(plan, c, sink, timings)
+        if simulate and needs_estimate(plan, sink.sweep, sink.cube):
+            estimate_into(plan, c, sink, timings)

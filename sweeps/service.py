@@ -13,16 +13,16 @@ transaction; a process computes a sweep's blocks only while it holds the sweep's
   journal keeps them), goes back to ``queued`` with a message, and serve exits 0. A second
   signal stops at once (the journal still keeps every finished block).
 - A foreground ``submit`` takes the lease (``Catalogue.acquire``). If a live process holds it,
-  the submitter *attaches* (:func:`attach`): it computes nothing, prints the progress the
+  the submitter *attaches* (:func:`sweeps.progress.attach`): it computes nothing, prints the progress the
   holder writes to the catalogue, and returns the final result. If the holder dies (its pid is
   gone on this host, or its heartbeat is older than ``STALE_S``), the attached submitter takes
   the lease over and computes the blocks still missing from the journal.
 - ``ditherlab cancel`` (:func:`cancel`): a queued sweep is cancelled at once; a running one is
-  flagged, and its runner, which asks the catalogue between blocks (:meth:`Lease.stop_reason`),
+  flagged, and its runner, which asks the catalogue between blocks (:meth:`sweeps.lease.Lease.stop_reason`),
   stops after its in-flight blocks.
 
 While it holds a lease a runner beats every ``HEARTBEAT_S`` seconds from a thread
-(:class:`Lease`); a beat that finds the lease taken over stops the runner too, so a block is
+(:class:`sweeps.lease.Lease`); a beat that finds the lease taken over stops the runner too, so a block is
 never computed by two processes that both believe they own the sweep.
 """
 from __future__ import annotations
@@ -35,111 +35,14 @@ import threading
 import time
 
 import store
-from store.catalogue import FINAL, HEARTBEAT_S, STALLED, Catalogue, owner_tag
+from store.catalogue import Catalogue
+from store.lease import HEARTBEAT_S, owner_tag
+
+from .progress import ATTACH_POLL_S, format_seconds, progress_text
 
 log = logging.getLogger("ditherlab")
 
-PROGRESS_EVERY_S = 0.5     # a runner writes its counts to the catalogue at most this often
-CANCEL_POLL_S = 0.25       # ... and asks whether it was cancelled at most this often
-ATTACH_POLL_S = 0.5        # an attached submitter reads the catalogue this often
 SERVE_POLL_S = 1.0         # an idle serve looks for queued sweeps this often
-
-# why a run stopped before its last block
-CANCELLED, SHUTDOWN, LEASE_LOST = "cancelled", "shutdown", "lease lost"
-
-
-class Lease:
-    """A held lease on one sweep: heartbeat thread, progress, and the stop question.
-
-    Create it with :meth:`take` (foreground submit) or, when the row is already ``running``
-    under ``owner`` (serve's claim), :meth:`take` as well: the same owner may re-take it.
-    """
-
-    def __init__(self, catalogue: Catalogue, sweep_id: str, owner: str,
-                 stop: threading.Event | None = None):
-        self.catalogue, self.sweep_id, self.owner = catalogue, sweep_id, owner
-        self.shutdown = stop or threading.Event()   # set by serve's signal handler
-        self.lost = threading.Event()               # a beat found the lease taken over
-        self.counts: dict = {}
-        self._last_progress = 0.0
-        self._last_cancel_poll = 0.0
-        self._cancelled = False
-        self._done = threading.Event()
-        self._thread = threading.Thread(target=self._beat_loop, daemon=True,
-                                        name=f"ditherlab-lease-{sweep_id}")
-
-    @classmethod
-    def take(cls, catalogue: Catalogue, sweep_id: str, owner: str | None = None,
-             stop: threading.Event | None = None) -> tuple[Lease | None, dict]:
-        """``(Lease, row)`` when this process now holds the sweep, else ``(None, row)``
-        with the row of the live holder."""
-        owner = owner or owner_tag()
-        got, row = catalogue.acquire(sweep_id, owner)
-        if not got:
-            return None, row
-        lease = cls(catalogue, sweep_id, owner, stop)
-        lease._thread.start()
-        return lease, row
-
-    def _beat_loop(self) -> None:
-        while not self._done.wait(HEARTBEAT_S):
-            try:
-                if not self.catalogue.beat(self.sweep_id, self.owner):
-                    self.lost.set()
-                    return
-            except Exception as err:  # noqa: BLE001 -- a busy catalogue: try again next beat
-                log.warning("heartbeat of sweep %s failed: %s", self.sweep_id, err)
-
-    def due(self) -> bool:
-        """True when the next :meth:`progress` would be written (PROGRESS_EVERY_S)."""
-        return time.monotonic() - self._last_progress >= PROGRESS_EVERY_S
-
-    def progress(self, force: bool = False, **counts) -> None:
-        """Record counts (``done_points``, ``failed_points``, ``done_blocks``,
-        ``run_started``, ``run_start_blocks``); written at most every PROGRESS_EVERY_S."""
-        self.counts.update(counts)
-        now = time.monotonic()
-        if force or now - self._last_progress >= PROGRESS_EVERY_S:
-            self._last_progress = now
-            if not self.catalogue.beat(self.sweep_id, self.owner, **self.counts):
-                self.lost.set()
-
-    def stop_reason(self) -> str | None:
-        """Why the runner should submit no more blocks, or None to go on."""
-        if self.lost.is_set():
-            return LEASE_LOST
-        if self._cancelled:
-            return CANCELLED
-        now = time.monotonic()
-        if now - self._last_cancel_poll >= CANCEL_POLL_S:
-            self._last_cancel_poll = now
-            if not self.catalogue.holds(self.sweep_id, self.owner):   # taken over
-                self.lost.set()
-                return LEASE_LOST
-            self._cancelled = self.catalogue.cancel_requested(self.sweep_id)
-            if self._cancelled:
-                return CANCELLED
-        if self.shutdown.is_set():
-            return SHUTDOWN
-        return None
-
-    def close(self) -> None:
-        """Stop the heartbeat (the row's state is set by :meth:`end`)."""
-        self._done.set()
-        if self._thread.is_alive() and self._thread is not threading.current_thread():
-            self._thread.join(timeout=HEARTBEAT_S + 1)
-
-    def end(self, state: str, message: str = "", **counts) -> bool:
-        """Give the lease back with the final ``state`` (``queued`` puts the sweep back in
-        the queue). False if the lease had been taken over (the row is left alone)."""
-        self.close()
-        counts = {k: v for k, v in {**self.counts, **counts}.items()
-                  if k in ("done_points", "failed_points", "done_blocks")}
-        if state == "queued":
-            return self.catalogue.requeue(self.sweep_id, self.owner, message, **counts)
-        changed, _ = self.catalogue.finish(self.sweep_id, state, owner=self.owner,
-                                           message=message, **counts)
-        return changed
 
 
 # --- submit --detach -------------------------------------------------------------------
@@ -162,61 +65,6 @@ def enqueue(plan, store_root) -> dict:
         catalogue.finish(plan.sweep_id, "cancelled", message="cube missing; re-queued")
         row = catalogue.enqueue(plan.sweep_id)
     return row
-
-
-# --- progress and attaching ------------------------------------------------------------
-
-def eta_s(row: dict, now: float | None = None) -> float | None:
-    """Seconds left for a running sweep, from its block rate since its run began."""
-    started, first = float(row.get("run_started") or 0.0), int(row.get("run_start_blocks") or 0)
-    done, total = int(row["done_blocks"]), int(row["n_blocks"])
-    if not started or done <= first or total <= 0:
-        return None
-    rate = (done - first) / max((now or time.time()) - started, 1e-9)
-    return max(total - done, 0) / rate
-
-
-def format_seconds(s: float | None) -> str:
-    if s is None:
-        return "?"
-    s = round(s)
-    if s < 60:
-        return f"{s} s"
-    if s < 3600:
-        return f"{s // 60} min {s % 60:02d} s"
-    return f"{s // 3600} h {s % 3600 // 60:02d} min"
-
-
-def progress_text(row: dict) -> str:
-    """``12/32 blocks (37 %), ETA 25 s`` for a running row."""
-    total = int(row["n_blocks"]) or 1
-    done = int(row["done_blocks"])
-    text = f"{done}/{row['n_blocks']} blocks ({100 * done / total:.0f} %)"
-    eta = eta_s(row)
-    return text + (f", ETA {format_seconds(eta)}" if eta is not None else "")
-
-
-def attach(catalogue: Catalogue, sweep_id: str, *, progress: bool = True,
-           poll_s: float = ATTACH_POLL_S, out=None) -> dict:
-    """Wait while another live process runs the sweep, printing its progress; returns the
-    row once nobody holds the lease (final, queued or stalled), with ``attached_to``: the
-    owner it waited for."""
-    out = out or sys.stderr
-    row = catalogue.get(sweep_id)
-    holder = row["owner"]
-    if progress:
-        print(f"sweep {sweep_id} is running in {row['owner']}: attaching (this process "
-              "computes nothing; Ctrl-C detaches and leaves it running)", file=out, flush=True)
-    last = ""
-    while row["state"] == "running" and Catalogue.alive(row):
-        if progress:
-            text = progress_text(row)
-            if text != last:
-                print(f"  {sweep_id}: {text}", file=out, flush=True)
-                last = text
-        time.sleep(poll_s)
-        row = catalogue.get(sweep_id)
-    return {**row, "attached_to": holder}
 
 
 # --- cancel ----------------------------------------------------------------------------
@@ -272,8 +120,9 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
           progress: bool = False, say=None, dashboard: str | None = None) -> int:
     """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
     (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
+    from .cluster import dask_client
     from .plan import make_plan
-    from .run import dask_client, submit
+    from .run import submit
     from .spec import SpecError, load_spec
 
     say = say or (lambda text: print(text, file=sys.stderr, flush=True))
@@ -377,5 +226,5 @@ def queue_hint(catalogue: Catalogue, rows: list[dict]) -> str | None:
     return None
 
 
-__all__ = ["CANCELLED", "FINAL", "LEASE_LOST", "SHUTDOWN", "STALLED", "Lease", "attach",
-           "cancel", "enqueue", "eta_s", "progress_text", "queue_hint", "serve"]
+# format_seconds, progress_text: re-exported for sweeps.cli (status)
+__all__ = ["cancel", "enqueue", "format_seconds", "progress_text", "queue_hint", "serve"]

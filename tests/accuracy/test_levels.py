@@ -19,7 +19,8 @@ from engine.batch import run_block
 from engine.settings import Settings
 from sweeps.accuracy import TARGET_ERROR
 from sweeps.plan import make_plan
-from sweeps.spec import LEVELS, parse_spec
+from sweeps.spec import parse_spec
+from sweeps.spec_models import LEVELS
 
 QUERIED = ["v_slow_p2p", "F_mean", "v_mean"]
 SPEC = {  # Fig. 10(d): LuGre slider, paper Sec. 5.1 parameters, square-velocity dither

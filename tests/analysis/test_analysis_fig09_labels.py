@@ -1,7 +1,7 @@
 """The Fig. 9 chart of specs/fig09.toml, labelled by connected components (DESIGN.md §1).
 
 The spec's averaged path, on a coarser grid, computed block by block as ``ditherlab
-submit`` does (sweeps.plan + sweeps.run.compute_block, no cluster, no files) and labelled
+submit`` does (sweeps.plan + sweeps.task.compute_block, no cluster, no files) and labelled
 by the store's query. Above v_ref = 0.2986 the undithered equilibrium is stable, so the
 primary zone lifts off W = 0 there; the paper says it "extends over the whole range of
 reference velocity" (Sec. 6, Fig. 9): it must stay one PU zone, not be cut at
@@ -16,9 +16,10 @@ from scipy import ndimage
 
 import store
 from store import PU, STABLE, SU
-from sweeps import run
+from sweeps.cube import empty_cube
 from sweeps.plan import make_plan
 from sweeps.spec import load_spec
+from sweeps.task import compute_block
 
 SPEC = Path(__file__).resolve().parents[2] / "specs" / "fig09.toml"
 V_C = 0.2986  # undithered threshold (DESIGN.md §1; test_analysis_stability.py computes it)
@@ -32,10 +33,10 @@ def fig09_cube():
     data["grid"]["W"] = {**W, "num": 49}  # the spec's range, a coarser grid
     data["grid"]["v_ref"] = {**v_ref, "num": 48}
     plan = make_plan(load_spec(data))
-    cube = run.empty_cube(plan)
+    cube = empty_cube(plan)
     for b in range(len(plan.blocks)):
-        result = run.compute_block(plan.scene, plan.block_points(b), plan.params,
-                                   plan.numerics.settings)
+        result = compute_block(plan.scene, plan.block_points(b), plan.params,
+                               plan.numerics.settings)
         store.fill_block(cube, {"index": plan.blocks[b], **result})
     assert np.all(cube["status"].values == store.OK)
     return cube

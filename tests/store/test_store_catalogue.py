@@ -176,7 +176,8 @@ def test_running_row_of_a_dead_owner_reads_stalled_and_old_catalogues_migrate(tm
     import subprocess
     import sys
 
-    from store.catalogue import STALLED, Catalogue, owner_tag
+    from store.catalogue import Catalogue
+    from store.lease import STALLED, owner_tag
 
     # a catalogue written before the owner column existed gains it on open
     con = sqlite3.connect(tmp_path / "catalogue.sqlite")
@@ -208,7 +209,8 @@ def test_a_killed_unreaped_submitter_reads_stalled(tmp_path):
     import sys
     import time
 
-    from store.catalogue import STALLED, Catalogue, owner_tag
+    from store.catalogue import Catalogue
+    from store.lease import STALLED, owner_tag
 
     child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:

@@ -13,7 +13,8 @@ from pathlib import Path
 import pytest
 
 import store
-from store.catalogue import STALE_S, STALLED, Catalogue, owner_tag
+from store.catalogue import Catalogue
+from store.lease import STALE_S, STALLED, owner_tag
 
 ROOT = Path(__file__).resolve().parents[2]
 HOST = owner_tag().rpartition(":")[0]

@@ -140,7 +140,7 @@ def test_temporaries_of_a_killed_writer_are_removed_on_the_next_read(cube, tmp_p
     code = ("import sys, numpy as np; sys.path.insert(0, %r); import store; "
             "from storetest_cubes import make_cube, block_arrays; c = make_cube(); "
             "j = store.Journal(%r); import os, signal; "
-            "store.layout.fsync_file = lambda p: os.kill(os.getpid(), signal.SIGKILL); "
+            "store.atomic.fsync_file = lambda p: os.kill(os.getpid(), signal.SIGKILL); "
             "j.write(7, store.block_payload(np.arange(3), **block_arrays(c, np.arange(3))))"
             % (str(__import__("pathlib").Path(__file__).parent), str(tmp_path)))
     proc = subprocess.run([sys.executable, "-c", code])

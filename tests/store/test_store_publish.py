@@ -16,8 +16,9 @@ from storetest_cubes import block_arrays, make_cube
 from storetest_writer import noise
 
 import store
-from store import layout
-from store.layout import NoSpaceError, temp_name
+from store import errors
+from store.atomic import temp_name
+from store.errors import NoSpaceError
 
 HERE = Path(__file__).parent
 N_BIG = 600  # 600 x 600 points, two outputs: ~3 MB of zlib-resistant data, ~0.25 s a publish
@@ -72,7 +73,7 @@ def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatc
 def test_publish_checks_free_space_before_writing(cube, tmp_path, monkeypatch):
     path = store.publish(cube, tmp_path / "cube.nc")
     before = path.read_bytes()
-    monkeypatch.setattr(layout, "free_bytes", lambda p: 10_000)
+    monkeypatch.setattr(errors, "free_bytes", lambda p: 10_000)
     with pytest.raises(NoSpaceError) as err:
         store.publish(make_cube(), path)
     assert err.value.free == 10_000 and err.value.needed > 10_000
@@ -124,7 +125,7 @@ def test_sigkill_mid_publish_leaves_previous_generation(tmp_path, fraction):
 
 def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, tmp_path):
     """What submit compares before it trusts a published cube (issue 10)."""
-    from store.cube import disagreement
+    from store.cube_io import disagreement
 
     path = store.publish(cube, tmp_path / "cube.nc")
     assert disagreement(path, cube) is None

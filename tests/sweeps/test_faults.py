@@ -16,8 +16,9 @@ import pytest
 import xarray as xr
 
 import store
+from sweeps.cube import empty_cube
 from sweeps.plan import make_plan
-from sweeps.run import empty_cube, submit
+from sweeps.run import submit
 from sweeps.spec import load_spec
 
 from .conftest import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab
@@ -183,7 +184,7 @@ def test_disk_full_keeps_the_previous_cube_and_resumes_when_freed(avg, tmpfs):
     before = cube.read_bytes()
     filler = root.parent / "filler"
     with open(filler, "wb") as f:                 # leave a few pages
-        f.write(b"\0" * max(0, store.layout.free_bytes(root) - 48 * 1024))
+        f.write(b"\0" * max(0, store.errors.free_bytes(root) - 48 * 1024))
     proc = ditherlab("submit", str(path), "--quiet", store=root)
     assert proc.returncode == 1
     (line,) = _stderr_lines(proc)

@@ -12,7 +12,8 @@ import sqlite3
 import xarray as xr
 
 from engine import jit, provenance
-from store.catalogue import _SCHEMA, Catalogue
+from store.catalogue import Catalogue
+from store.catalogue_db import SCHEMA
 from sweeps import cli, lookup, version
 from sweeps.spec import parse_spec
 
@@ -151,7 +152,7 @@ def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stal
 
 def test_old_catalogues_gain_the_fingerprint_column(tmp_path):
     con = sqlite3.connect(tmp_path / "catalogue.sqlite")
-    con.execute(_SCHEMA)            # the first schema, without engine_fingerprint
+    con.execute(SCHEMA)             # the first schema, without engine_fingerprint
     con.close()
     cat = Catalogue(tmp_path)
     row = cat.register("abc", "n", "{}", 1, 1, tmp_path / "abc", engine_fingerprint=FP_A)

@@ -4,7 +4,7 @@ stops queued and running sweeps, a ``serve`` killed with SIGKILL reads ``stalled
 resumed, two submitters of one spec compute every block exactly once, and ``partial`` (some
 points failed) is told apart from ``failed`` (the run crashed).
 
-Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.run.compute_block
+Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.task.compute_block
 appends one line per computed block, in whichever process computes it)."""
 import collections
 import os
@@ -18,9 +18,9 @@ import xarray as xr
 
 import store
 from sweeps import make_plan
-from sweeps.run import block_key
-from sweeps.run import compute_block as REAL_COMPUTE_BLOCK
 from sweeps.spec import load_spec
+from sweeps.task import block_key
+from sweeps.task import compute_block as REAL_COMPUTE_BLOCK
 
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
@@ -311,7 +311,7 @@ def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, 
 # --- states: partial (some points failed) is not failed (the run crashed) -------------
 
 def _fake_runs(monkeypatch, how):
-    import sweeps.run as R
+    import sweeps.task as T
 
     real = REAL_COMPUTE_BLOCK
 
@@ -326,7 +326,7 @@ def _fake_runs(monkeypatch, how):
             raise RuntimeError("the cluster went away")
         return real(scene, points, p, settings)
 
-    monkeypatch.setattr(R, "compute_block", {"partial": some_points_fail, "crash": crash}[how])
+    monkeypatch.setattr(T, "compute_block", {"partial": some_points_fail, "crash": crash}[how])
 
 
 SMALL_AVG = {"name": "avg", "method": "averaged",   # 8 one-point blocks
@@ -372,7 +372,7 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
         tmp_path, monkeypatch):
     """If another process takes the lease over (it judged this one dead), this runner
     submits no further block and does not overwrite the new holder's row."""
-    import sweeps.run as R
+    import sweeps.task as T
     from sweeps import parse_spec, submit
 
     plan = make_plan(parse_spec(SMALL_AVG))
@@ -387,7 +387,7 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
         time.sleep(0.3)
         return REAL_COMPUTE_BLOCK(scene, points, p, settings)
 
-    monkeypatch.setattr(R, "compute_block", slow)
+    monkeypatch.setattr(T, "compute_block", slow)
     res = submit(plan, root, progress=False)
     assert res.blocks_run == 3 and res.state == "running", res   # stopped after block 3
     assert "took the sweep over" in res.message

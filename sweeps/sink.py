@@ -1,0 +1,82 @@
+"""Where finished blocks go in the submitting process (:class:`BlockSink`): the journal
+first (durable), then the in-memory cube, republished every few seconds, and progress to
+the catalogue under the sweep's lease; and the counts of a cube's points and blocks."""
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+
+import store
+from engine import status as S
+
+from .lease import LEASE_LOST
+from .plan import Plan
+
+PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running
+
+log = logging.getLogger("ditherlab")
+
+
+
+class BlockSink:
+    """Receives finished blocks in the submitting process: journal first (durable), then
+    the in-memory cube, republished atomically every PUBLISH_EVERY_S seconds; progress
+    (journaled blocks, points) goes to the catalogue under the lease. Between blocks the
+    dispatch loop asks :meth:`should_stop` (cancel, serve shutdown, lease lost)."""
+
+    def __init__(self, plan: Plan, cube, journal, sweep, lease):
+        self.plan, self.cube, self.journal = plan, cube, journal
+        self.sweep, self.lease = sweep, lease
+        self.last_publish = time.monotonic()
+        self.done = set(done_blocks(plan, cube))    # blocks with every point computed
+        self.blocks_run = 0
+        self.stopped: str | None = None              # sweeps.lease.CANCELLED / SHUTDOWN / ...
+        self._report(force=True)
+
+    def __call__(self, b: int, result: dict) -> None:
+        if "error" in result:
+            log.warning("block %d failed: %s", b, result["error"])
+        payload = {"index": self.plan.blocks[b],
+                   **{k: v for k, v in result.items() if k != "error"}}
+        self.journal.write(b, payload)
+        store.fill_block(self.cube, payload)
+        self.done.add(b)
+        self.blocks_run += 1
+        if time.monotonic() - self.last_publish > PUBLISH_EVERY_S and \
+                self.stopped != LEASE_LOST:
+            store.publish(self.cube, self.sweep.cube)
+            self.last_publish = time.monotonic()
+        self._report()
+
+    def _report(self, force: bool = False, **extra) -> None:
+        if force or self.lease.due():
+            self.lease.progress(force=True, done_blocks=len(self.done), **point_counts(self.cube),
+                                **extra)
+
+    def started(self) -> None:
+        """Blocks begin to flow now (cluster up, kernels warm): the origin of the ETA."""
+        self._report(force=True, run_started=time.time(), run_start_blocks=len(self.done))
+
+    def should_stop(self) -> bool:
+        """True when no further block should be submitted (the reason in ``stopped``)."""
+        if self.stopped is None:
+            self.stopped = self.lease.stop_reason()
+            if self.stopped is not None:
+                log.warning("sweep %s: stopping after the blocks in flight (%s)",
+                            self.plan.sweep_id, self.stopped)
+        return self.stopped is not None
+
+
+def done_blocks(plan: Plan, cube) -> list[int]:
+    status = cube["status"].values.ravel()
+    return [b for b, index in enumerate(plan.blocks) if np.all(status[index] != S.NOT_COMPUTED)]
+
+
+def point_counts(cube) -> dict:
+    status = cube["status"].values
+    n_ok = int((status == S.OK).sum())
+    n_missing = int((status == S.NOT_COMPUTED).sum())
+    n_failed = int(status.size - n_ok - n_missing)
+    return {"done_points": n_ok + n_failed, "failed_points": n_failed}
