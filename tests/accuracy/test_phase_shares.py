@@ -18,7 +18,7 @@ import pytest
 
 from engine import params as P
 from engine.batch import run_block
-from engine.observables import share_above
+from engine.phase_book import share_above
 from sweeps.accuracy import promise
 from sweeps.plan import make_plan
 from sweeps.spec import parse_spec
