@@ -124,3 +124,21 @@ def stick_runs(t, alpha):
     edges = np.flatnonzero(np.diff(stuck.astype(int)))
     starts, ends = edges[::2], edges[1::2] - 1
     return t[ends] - t[starts]
+
+
+@functools.lru_cache(maxsize=32)
+def cached_run(**kw) -> Trajectory:
+    """:func:`run`, remembered per process (Figs. 11 and 12, 16 and 17 share their runs)."""
+    return run(**kw)
+
+
+def sec7(ctx) -> dict:
+    """The Sec. 7 parameters, read from the fig14 scene (specs/fig14.toml, one source):
+    ``v_ref``, ``vd``, ``lam``, ``slow`` (amplitude, omega) and ``t_end``."""
+    spec = ctx.spec("fig14")
+    params, grid = spec.get("params", {}), spec["grid"]
+    slow = params.get("slow_force", {"amplitude": 0.0, "omega": 0.0})
+    return {"v_ref": float(grid["v_ref"][0]), "vd": float(grid["v_d"][0]),
+            "lam": float(params.get("lam", 0.8)),
+            "slow": (float(slow["amplitude"]), float(slow["omega"])),
+            "t_end": float(spec["time"]["t_end"])}
