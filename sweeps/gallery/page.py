@@ -35,6 +35,10 @@ def _head(results, size, stamp) -> str:
             + ", ".join(f"{n[v]} {v}" for v in (HOLDS, PARTLY, FAILS)) + ".")
 
 
+def _numbers(r) -> str:
+    return ", ".join(f"{k} = {v:.4g}" for k, v in r.numbers.items())
+
+
 def _markdown(results, size, stamp) -> str:
     out = ["# ditherlab gallery: the paper's figures, recomputed", "",
            "Chatterjee, Singha, Karmakar, J. Sound Vib. 269 (2004) 61-89. Each verdict follows "
@@ -47,7 +51,8 @@ def _markdown(results, size, stamp) -> str:
                 f"**Paper's claim.** {r.claim}", "", "**Numbers.**", ""]
         out += [f"- {'ok' if c.ok else 'NO'}: {c.claim}: {c.measured} (rule {c.rule})"
                 for c in r.checks]
-        out += ["", f"**Verdict: {r.verdict}.** {r.reason}", "",
+        out += ["", "Measured: " + _numbers(r), "",
+                f"**Verdict: {r.verdict}.** {r.reason}", "",
                 "**Readings and choices.**", ""]
         out += [f"- {c}" for c in r.choices] or ["- none"]
     return "\n".join(out) + "\n"
@@ -69,6 +74,7 @@ def _html(results, size, stamp) -> str:
             f"<div class=fig id='{r.key}'><img src='{e(r.png.name)}' alt='{e(r.key)}'>"
             f"<div class=txt><h2>{e(r.title)}</h2><p><i>{e(r.ref)}</i></p>"
             f"<p><b>Paper's claim.</b> {e(r.claim)}</p><p><b>Numbers.</b></p><ul>{checks}</ul>"
+            f"<p><small>Measured: {e(_numbers(r))}</small></p>"
             f"<p><b>Verdict:</b> <span class=v style='background:{COLOURS[r.verdict]}'>"
             f"{e(r.verdict)}</span> {e(r.reason)}</p>"
             f"<p><b>Readings and choices.</b></p><ul>{choices}</ul></div></div>")
