@@ -74,3 +74,21 @@ def test_a_small_scene_changes_only_grid_counts(name):
 def test_shrink_keeps_the_ends():
     assert shrink([0, 1, 2, 3, 4, 5, 6], 3) == [0, 3, 6]
     assert shrink({"start": 0.0, "stop": 1.0, "num": 81}, 5)["num"] == 5
+
+
+def test_map_pick_draws_a_handful_of_w_curves(tmp_path, capsys):
+    """--pick N and repeated --sel W=... on an averaged cube (small demo spec, a second)."""
+    store = str(tmp_path / "store")
+    spec = tmp_path / "s.toml"
+    spec.write_text((ROOT / "specs" / "demo-stability.toml").read_text()
+                    .replace("num = 81", "num = 9").replace("num = 100", "num = 12"))
+    assert main(["submit", str(spec), "--store", store, "-q"]) == 0
+    capsys.readouterr()
+    out = tmp_path / "pick.png"
+    assert main(["map", "demo-stability", "--kind", "friction", "--pick", "3", "--store", store,
+                 "-o", str(out)]) == 0
+    assert "(W = 0, 0.5, 1)" in capsys.readouterr().out          # ends + middle of 0..1
+    assert out.read_bytes()[:4] == b"\x89PNG"
+    assert main(["map", "demo-stability", "--kind", "friction", "--sel", "W=0.26",
+                 "--sel", "W=0.74", "--store", store, "-o", str(out)]) == 0
+    assert "(W = 0.25, 0.75)" in capsys.readouterr().out         # nearest grid values
