@@ -110,9 +110,8 @@ def _map_picked(args) -> int:
     if args.pick is not None:
         keep = shrink(list(grid), args.pick)
     else:
-        keep = sorted({float(grid[np.argmin(abs(grid - w))]) for w in
-                       parse_sel(wanted).values() or []} | {
-            float(grid[np.argmin(abs(grid - parse_sel([w])["W"]))]) for w in wanted})
+        keep = sorted({float(grid[np.argmin(abs(grid - parse_sel([w])["W"]))])
+                       for w in wanted})
     rest = [s for s in args.sel or () if s not in wanted]
     try:
         store.friction_curves(ds.sel(W=keep), args.output, sel=parse_sel(rest))
