@@ -45,7 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_scene_commands = _scene_hook()
 
     p = sub.add_parser("submit", parents=[common], help="run a sweep spec (resumes a partial one)")
-    p.add_argument("spec", help="spec file (.toml or .json)")
+    p.add_argument("spec", nargs="?", help="spec file (.toml or .json); or --scene NAME")
     _cluster_options(p)
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, help="point budget")
     p.add_argument("--detach", action="store_true",
@@ -76,7 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_query)
 
     p = sub.add_parser("map", parents=[common], help="draw a map from a cube (png, pdf, svg)")
-    p.add_argument("sweep")
+    p.add_argument("sweep", nargs="?", help="sweep id, id prefix or name; or --scene NAME")
     p.add_argument("--kind", required=True, choices=("stick-slip", "stability", "friction"))
     p.add_argument("--sel", action="append", metavar="AXIS=VALUE")
     p.add_argument("-o", "--output", required=True,
@@ -85,7 +85,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("plan", parents=[common],
                        help="what a spec will run, and its cost per accuracy level")
-    p.add_argument("spec")
+    p.add_argument("spec", nargs="?", help="spec file (.toml or .json); or --scene NAME")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
     p.add_argument("--record", action="store_true",

@@ -1,0 +1,208 @@
+"""Figs. 5, 7, 9 (averaged theory, Secs. 5-6) and, beyond the paper, the sine-velocity
+dither in the averaged theory next to the square wave."""
+from __future__ import annotations
+
+import numpy as np
+
+from engine import params as P
+from engine.analysis import effective_friction, negative_slope_zones, sine_force_simplified
+from engine.analysis import stability_chart as engine_chart
+
+from . import plotting as G
+from .verdicts import Check, FigureResult, above, below, monotone
+
+FIG5_W = (0.25, 0.5, 1.0)       # not given by the paper; 0.5 is its Fig. 6 amplitude
+FIG7_A = (0.5, 0.75)            # a Omega_f of Fig. 7
+SLOPE_TOL = 0.05                # relative, for a slope against its closed form
+H = 1e-6                        # finite-difference step of a slope at v = 0
+
+
+def _slope0(f):
+    return (f(H) - f(-H)) / (2 * H)
+
+
+def fig05(ctx) -> FigureResult:
+    v = np.linspace(-1.5, 1.5, 1501 if ctx.small else 6001)
+    fig, ax = G.panels(2, 2, title="Fig. 5: effective friction, square-velocity dither "
+                       "(Eqs. 5.9-5.14)", sharex=True)
+    for a, (txt, kw) in zip(ax, [("LuGre, vd = 0.1", {"vd": 0.1}),
+                                 ("LuGre, vd = 0.01; o Eq. 5.12", {"vd": 0.01}),
+                                 ("static model, Eq. 5.14", {"model": "static"})]):
+        for W in FIG5_W:
+            a.plot(v, effective_friction(v, W, P.pack(), **kw), lw=1, label=f"W = {W}")
+        G.label(a, txt)
+    for W in FIG5_W:
+        ax[1].plot(v[::60], effective_friction(v[::60], W, P.pack(), model="no-damping"), "o",
+                   mfc="none", ms=3, c="k")
+    vv = v[v != 0]
+    ax[3].plot(vv, effective_friction(vv, 0.0, P.pack()), c="k", lw=1)
+    G.label(ax[3], "without dither (LuGre)")
+    for a in ax:
+        a.set(xlabel="slow velocity v", ylabel="<F>")
+    ax[0].legend(fontsize=7)
+    png = G.save(fig, ctx.png("fig05"))
+    fine = np.linspace(0.0, 1.5, 150001)
+    zones = {vd: {W: negative_slope_zones(fine, effective_friction(fine, W, P.pack(vd=vd),
+                                                                   slope=True)[1])
+                  for W in FIG5_W} for vd in (0.1, 0.01)}
+    secondary = {vd: [(W, z) for W, zs in zones[vd].items() for z in zs if z[1] < W]
+                 for vd in zones}
+    dev = max(abs(_slope0(lambda x, W=W: effective_friction(x, W, P.pack(vd=0.01)))
+                  / ((1 + W * 0.004) / W) - 1) for W in FIG5_W)
+    s_static = _slope0(lambda x: effective_friction(x, 0.5, P.pack(), model="static"))
+    lo = np.linspace(0.01, 0.25, 25)
+    gap = float(np.min(effective_friction(lo, 0.5, P.pack(vd=0.01))
+                       - effective_friction(lo, 0.5, P.pack(), model="static")))
+    checks = [
+        below("low-velocity slope = (fc + W sigma2)/W (Eq. 5.13), vd = 0.01",
+              "largest relative deviation", dev, SLOPE_TOL),
+        Check("vd = 0.1: a secondary negative slope below v = W",
+              "; ".join(f"W={W}: v in [{a:.3f}, {b:.3f}]" for W, (a, b) in secondary[0.1])
+              or "none", "at least one zone ending below W", bool(secondary[0.1])),
+        Check("vd = 0.01: no secondary zone (implied by Fig. 5(b) and Sec. 6)",
+              "; ".join(f"W={W}: [{a:.3f}, {b:.3f}]" for W, (a, b) in secondary[0.01])
+              or "none", "no zone ending below W", not secondary[0.01]),
+        below("static model: slope sigma2 whatever W (Eq. 5.14)", "|slope - sigma2|",
+              abs(s_static - 0.004), 1e-6),
+        above("the static model underestimates the low-velocity friction", "min of "
+              "<F>_LuGre - <F>_static on 0.01 <= v <= 0.25, W = 0.5", gap, 0.0),
+    ]
+    return FigureResult(
+        "fig05", "Fig. 5: effective friction, square-velocity dither", "Fig. 5, Eqs. 5.9-5.14",
+        "At low velocity the effective friction is nearly viscous with slope (fc + W sigma2)/W; "
+        "vd = 0.1 adds a secondary negative slope below W, vd = 0.01 does not; the static "
+        "model has slope sigma2 and underestimates the friction.", png, checks,
+        numbers={"slope_dev": float(dev), "static_slope": float(s_static),
+                 "n_secondary_vd0.1": float(len(secondary[0.1])),
+                 "n_secondary_vd0.01": float(len(secondary[0.01]))},
+        choices=[f"The W values of Fig. 5 are not given: W = {FIG5_W}.",
+                 "Eq. 5.13 approximates Eq. 5.12's exact slope g(W)/W + sigma2 (docs/MODEL.md)."])
+
+
+def fig07(ctx) -> FigureResult:
+    v = np.linspace(-1.5, 1.5, 1201)
+    fig, ax = G.panels(1, 2, title="Fig. 7: effective friction, sinusoidal dither (Eq. 5.20)",
+                       width=4.4)
+    slopes, full_dev = [], []
+    for A, ls in zip(FIG7_A, ("-", "--")):
+        ax[0].plot(v, sine_force_simplified(v, A, 1.0, 0.004), ls, c="k", lw=1,
+                   label=f"a Omega = {A}")
+        full = effective_friction(v, A, P.pack(vd=0.01), dither="sine-force")
+        ax[1].plot(v, full, ls, lw=1, label=f"full LuGre, a Omega = {A}")
+        full_dev.append(float(np.max(np.abs(full - sine_force_simplified(v, A, 1.0, 0.004)))))
+        slopes.append(_slope0(lambda x, A=A: sine_force_simplified(x, A, 1.0, 0.004)))
+    for a in ax:
+        a.set(xlabel="slow velocity v", ylabel="<F>")
+        a.legend(fontsize=7)
+    G.label(ax[0], "Eq. 5.20 (corrected)")
+    G.label(ax[1], "averaged full model, vd = 0.01")
+    png = G.save(fig, ctx.png("fig07"))
+    eq521 = [np.pi / (2 * A) + 0.004 for A in FIG7_A]
+    dev = max(abs(s / e - 1) for s, e in zip(slopes, eq521))
+    checks = [
+        below("low-velocity slope pi fc/(2 a Omega) + sigma2 (Eq. 5.21)",
+              "largest relative deviation", dev, SLOPE_TOL),
+        monotone("the slope decreases with a Omega", "slope at v = 0", FIG7_A, slopes,
+                 increasing=False),
+        below("the partial model misses little (Sec. 5.2)", "max |<F>_full - <F>_5.20| "
+              "(force units, fc = 1)", max(full_dev), 0.2),
+    ]
+    return FigureResult(
+        "fig07", "Fig. 7: effective friction, sinusoidal dither", "Fig. 7, Eqs. 5.15-5.21",
+        "Near zero velocity the effective friction is nearly viscous with slope "
+        "pi fc/(2 a Omega) + sigma2, decreasing with the dither strength.", png, checks,
+        numbers={"slope_0.5": float(slopes[0]), "slope_0.75": float(slopes[1]),
+                 "full_dev": float(max(full_dev))},
+        choices=["Eq. 5.19a lacks a factor 1/pi (Eq. 5.20 is right).",
+                 "Eq. 5.20's outer branch is fc sgn(v) (printed fs jumps by 0.5 at |v| = a Omega).",
+                 "'One does not miss much' read as a largest gap below 0.2 fc between the "
+                 "full averaged LuGre (vd = 0.01) and Eq. 5.20."])
+
+
+def fig09(ctx) -> FigureResult:
+    import store
+
+    ds = ctx.sweep("fig09")
+    fig, ax = G.panels(1, 2, title="Fig. 9: stability chart (averaged, Eqs. 6.4-6.7)",
+                       width=4.2, height=3.2)
+    labels = {}
+    for a, vd in zip(ax, (0.1, 0.01)):
+        chart = store.stability_chart(ds, {"v_d": vd})
+        labels[vd] = chart
+        a.pcolormesh(chart.v_ref, chart.W, chart.T.values, shading="nearest",
+                     cmap=store.maps.ListedColormap(["#ffffff", "#e4572e", "#4c72b0"]),
+                     vmin=-0.5, vmax=2.5)
+        a.plot(chart.v_ref, chart.v_ref, "k-.", lw=0.8)
+        a.set(xlabel="v_ref", ylabel="W", ylim=(0, float(chart.W.max())))
+        G.label(a, f"vd = {vd}: red PU, blue SU")
+    png = G.save(fig, ctx.png("fig09"))
+    c = labels[0.1]
+    row = c.sel(v_ref=0.1, method="nearest")
+    stable_W = row.W.values[row.values == store.query.STABLE]
+    w_min = float(stable_W.min()) if stable_W.size else np.nan
+    vref = float(row.v_ref)
+    above_vref = row.values[row.W.values > vref]
+    share = float(np.mean(above_vref == store.query.STABLE)) if above_vref.size else 0.0
+    n = {vd: {k: int((labels[vd] == code).sum()) for k, code in
+              (("PU", store.query.PU), ("SU", store.query.SU))} for vd in labels}
+    checks = [
+        above("vd = 0.1: a primary unstable zone", "PU points", n[0.1]["PU"], 0),
+        above("vd = 0.1: a secondary unstable zone", "SU points", n[0.1]["SU"], 0),
+        below("vd = 0.01: the secondary zone disappears", "SU points", n[0.01]["SU"], 1),
+        Check("at v_ref ~ vs, W above v_ref stabilises", f"at v_ref = {vref:.3g}: share of "
+              f"W > v_ref that is stable {share:.3g}; least stable W {w_min:.3g}",
+              "share == 1", bool(share == 1.0)),
+    ]
+    return FigureResult(
+        "fig09", "Fig. 9: stability chart", "Fig. 9, Sec. 6, Eqs. 6.4-6.7",
+        "Two instability zones for vd = 0.1 (primary over the whole v_ref range, secondary at "
+        "higher v_ref); the secondary zone disappears for vd = 0.01; near v_ref ~ vs a dither "
+        "with W > v_ref stabilises.", png, checks,
+        numbers={"PU_0.1": n[0.1]["PU"], "SU_0.1": n[0.1]["SU"], "SU_0.01": n[0.01]["SU"],
+                 "W_stable_at_vs": w_min,
+                 "stable_share_above_vref": share},
+        choices=["Eq. 6.6's second bracket uses sigma1(v - W) (printed v + W).",
+                 "PU/SU by connected components touching W = 0 (docs/MODEL.md Sec. 5).",
+                 f"Grid of the fig09 scene at size {ctx.size} "
+                 f"({ds.sizes['W']} W x {ds.sizes['v_ref']} v_ref)."])
+
+
+def beyond_sine(ctx) -> FigureResult:
+    """Square-wave and sine-velocity dither of equal amplitude W in the averaged theory."""
+    W, v = 0.5, np.linspace(-1.2, 1.2, 1201)
+    fig, ax = G.panels(1, 2, title="Beyond the paper: sine-velocity vs square-wave dither "
+                       "(averaged)", width=4.4)
+    for dither, ls in (("square-velocity", "-"), ("sine-velocity", "--")):
+        for vd in (0.1, 0.01):
+            ax[0].plot(v, effective_friction(v, W, P.pack(vd=vd), dither=dither), ls, lw=1,
+                       label=f"{dither.split('-')[0]}, vd = {vd}")
+    ax[0].set(xlabel="slow velocity v", ylabel="<F>")
+    ax[0].legend(fontsize=7)
+    G.label(ax[0], f"W = {W}")
+    Ws, vr = np.linspace(0.0, 1.2, 61 if ctx.small else 241), np.linspace(0.01, 1.2, 60)
+    least = {}
+    for dither, ls in (("square-velocity", "-"), ("sine-velocity", "--")):
+        st = engine_chart(Ws, vr, P.pack(vd=0.01), dither=dither)["stable"]
+        edge = [Ws[np.argmax(st[:, j])] if st[:, j].any() else np.nan for j in range(vr.size)]
+        ax[1].plot(vr, edge, ls, label=dither)
+        least[dither] = float(edge[int(np.argmin(abs(vr - 0.1)))])
+    ax[1].set(xlabel="v_ref", ylabel="least stable W")
+    ax[1].legend(fontsize=7)
+    G.label(ax[1], "vd = 0.01")
+    png = G.save(fig, ctx.png("beyond_sine"))
+    s = {d: _slope0(lambda x, d=d: effective_friction(x, W, P.pack(), dither=d,
+                                                      model="no-damping"))
+         for d in ("square-velocity", "sine-velocity")}
+    ratio = s["sine-velocity"] / s["square-velocity"]
+    checks = [below("sine/square low-velocity slope = pi/2 (independent: <|W sin|> = 2W/pi)",
+                    "|ratio/(pi/2) - 1|", abs(ratio / (np.pi / 2) - 1), SLOPE_TOL),
+              above("a sine needs a larger W than a square wave to stabilise (v_ref = 0.1)",
+                    "W_sine / W_square", least["sine-velocity"] / least["square-velocity"],
+                    1.0)]
+    return FigureResult(
+        "beyond_sine", "Beyond: sine vs square dither", "Secs. 5.1, 6 with a sine wave",
+        "(Not in the paper.) With equal amplitude, a sine-velocity dither gives a steeper "
+        "low-velocity slope (by pi/2) and needs a larger W to stabilise than the square wave.",
+        png, checks, numbers={"slope_ratio": float(ratio), **{f"W_{k}": v for k, v in
+                                                              least.items()}},
+        choices=["Sine average by Gauss-Legendre quadrature per smooth piece (engine)."])

@@ -1,0 +1,115 @@
+"""Figs. 15-17: the elasto-plastic slider at three command velocities, without slow force,
+without (Fig. 15) and with (Figs. 16, 17) sine-velocity dither."""
+from __future__ import annotations
+
+from . import plotting as G
+from . import trajectories as T
+from .fig_ep import EP_NOTES, LONG
+from .verdicts import Check, FigureResult, monotone
+
+V_M = (0.1, 0.5, 1.0)
+DITHER = (1.5, 100.0)     # (W, omega) of Figs. 16, 17: not given; the Figs. 11-12 values
+T_TRANSIENT = 20.0        # shares and means over [20, t_end]
+WINDOW = 2.0              # Fig. 17 shows a short ("high-frequency") window of this length (tau)
+NOTES = EP_NOTES + [
+    f"The dither of Figs. 16-17 is not given: W = {DITHER[0]}, omega = {DITHER[1]:g} "
+    "(as in Figs. 11-12).",
+    "No slow force ('without any slow excitation'); from rest; shares and means over "
+    f"[{T_TRANSIENT:g}, t_end]."]
+
+
+def _runs(ctx, dithered: bool):
+    s = {**T.sec7(ctx), "slow": (0.0, 0.0), "t_transient": T_TRANSIENT}
+    s.pop("v_ref")
+    W, om = DITHER if dithered else (0.0, 100.0)
+    return [T.cached_run(W=W, omega=om, v_ref=v, **s) for v in V_M]
+
+
+def _histories(ctx, key, runs, title, *, friction: bool):
+    fig, ax = G.panels(3, 2, title=title, width=4.0, height=2.0, sharex=True)
+    for k, (r, v) in enumerate(zip(runs, V_M)):
+        ax[2 * k].plot(*G.thin(r.t, r.x), lw=0.8, label="displacement")
+        right = ax[2 * k + 1]
+        right.plot(*G.thin(r.t, T.lowpass(r.v, r.t[1] - r.t[0], 20.0)), "--", lw=0.7,
+                   label="velocity (filtered)")
+        if friction:
+            right.plot(*G.thin(r.t, T.lowpass(r.F, r.t[1] - r.t[0], 20.0)), lw=0.7,
+                       label="friction (filtered)")
+        for a in ax[2 * k: 2 * k + 2]:
+            G.label(a, f"v_m = {v}")
+            a.set(xlabel=f"time {G.TAU}")
+    ax[0].legend(fontsize=7)
+    ax[1].legend(fontsize=7)
+    return G.save(fig, ctx.png(key))
+
+
+def fig15(ctx) -> FigureResult:
+    runs = _runs(ctx, False)
+    png = _histories(ctx, "fig15", runs, "Fig. 15: without dither", friction=False)
+    longest = [r.outputs["max_stick"] for r in runs]
+    checks = [Check(f"v_m = {v}: long-duration stick-slip without dither",
+                    f"longest stick {m:.3g} tau", f"> {LONG} tau", bool(m > LONG))
+              for v, m in zip(V_M, longest)]
+    return FigureResult(
+        "fig15", "Fig. 15: histories without dither", "Fig. 15, Sec. 7",
+        "Without dither the slider moves by long-duration stick-slip (what Fig. 16's dither "
+        "suppresses).", png, checks,
+        numbers={f"max_stick_v{v}": m for v, m in zip(V_M, longest)}
+        | {f"F_mean_v{v}": r.outputs["F_mean"] for v, r in zip(V_M, runs)}, choices=NOTES)
+
+
+def fig16(ctx) -> FigureResult:
+    runs, bare = _runs(ctx, True), _runs(ctx, False)
+    png = _histories(ctx, "fig16", runs, f"Fig. 16: with dither W = {DITHER[0]}, omega = "
+                     f"{DITHER[1]:g}", friction=True)
+    longest = [r.outputs["max_stick"] for r in runs]
+    F = [r.outputs["F_mean"] for r in runs]
+    F0 = [r.outputs["F_mean"] for r in bare]
+    checks = [
+        Check("dither suppresses long-duration stick-slip", ", ".join(
+            f"v_m={v}: {m:.3g}" for v, m in zip(V_M, longest)), f"longest stick < {LONG} tau",
+              bool(max(longest) < LONG)),
+        Check("the dithered friction is reduced", ", ".join(
+            f"v_m={v}: {a:.3g} vs {b:.3g}" for v, a, b in zip(V_M, F, F0)),
+              "mean F with dither < without, every v_m", bool(all(a < b for a, b in zip(F, F0)))),
+        monotone("friction increases with the sliding velocity (Figs. 16(b), (d), (f))",
+                 "mean F", V_M, F, increasing=True),
+    ]
+    return FigureResult(
+        "fig16", "Fig. 16: histories with dither", "Fig. 16, Sec. 7",
+        "Dither suppresses the long-duration stick-slip and reduces the friction; the "
+        "friction increases with the sliding velocity.", png, checks,
+        numbers={f"F_mean_v{v}": x for v, x in zip(V_M, F)}
+        | {f"max_stick_v{v}": m for v, m in zip(V_M, longest)}, choices=NOTES)
+
+
+def fig17(ctx) -> FigureResult:
+    runs = _runs(ctx, True)
+    fig, ax = G.panels(3, 2, title="Fig. 17: EP-function (solid), friction (dashed) and "
+                       "histogram, with dither", width=4.0, height=2.0)
+    for k, (r, v) in enumerate(zip(runs, V_M)):
+        win = (r.t >= r.t[-1] - WINDOW)
+        ax[2 * k].plot(r.t[win], r.alpha[win], lw=0.7, label="alpha")
+        ax[2 * k].plot(r.t[win], r.F[win], "--", lw=0.7, label="friction")
+        ax[2 * k].set(xlabel=f"time {G.TAU}")
+        G.label(ax[2 * k], f"v_m = {v}")
+        G.histogram(ax[2 * k + 1], r.alpha_hist)
+        G.label(ax[2 * k + 1], f"stick share {r.outputs['stick_fraction']:.3f}")
+    ax[0].legend(fontsize=7)
+    png = G.save(fig, ctx.png("fig17"))
+    stick = [r.outputs["stick_fraction"] for r in runs]
+    longest = [r.outputs["max_stick"] for r in runs]
+    checks = [
+        Check("long stick-slip replaced by short-duration phases", ", ".join(
+            f"v_m={v}: {m:.3g}" for v, m in zip(V_M, longest)), f"longest stick < {LONG} tau",
+              bool(max(longest) < LONG)),
+        monotone("the relative duration of short sticking increases with v_m", "stick share",
+                 V_M, stick, increasing=True),
+    ]
+    return FigureResult(
+        "fig17", "Fig. 17: EP-function, friction, histograms", "Fig. 17, Sec. 7",
+        "With dither the long stick-slip is broken into short phases, and the total share of "
+        "short sticking increases with the command velocity (which accounts for the friction "
+        "rising with velocity).", png, checks,
+        numbers={f"stick_v{v}": s for v, s in zip(V_M, stick)},
+        choices=NOTES + [f"Histories drawn over the last {WINDOW:g} tau."])
