@@ -208,3 +208,7 @@ def _one_line_warnings(verbosity: int = 0):
         logger.removeHandler(handler)
 
 
+
+
+if __name__ == "__main__":   # python -m sweeps.cli.main (python -m sweeps.cli works too)
+    sys.exit(main())

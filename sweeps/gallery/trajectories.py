@@ -65,7 +65,7 @@ def run(*, friction: str = "elastoplastic", dither: str = "sine-velocity", W: fl
     p = P.pack(W=W, omega=omega if dither != "none" else 0.0, v_ref=v_ref, slow_a=slow[0],
                slow_omega=slow[1], vd=vd, lam=lam, t_end=t_end, t_transient=t_transient)
     outputs = EP_OUTPUTS if friction == "elastoplastic" else LUGRE_OUTPUTS
-    scene = Scene.from_params(p, friction=friction, dither=dither, method="dopri5",
+    scene = Scene.from_params(p, friction=friction, dither=dither, integrator="dopri5",
                               outputs=outputs)
     n = int(t_end / dt) + 2
     t0 = time.perf_counter()
