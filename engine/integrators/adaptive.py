@@ -115,7 +115,9 @@ def make_stepper(problem, method: Method) -> Stepper:
         return (m_alloc(), np.zeros((n_dense, n)), np.zeros((3, n)), np.zeros((5, n_g)),
                 np.zeros(n_st))
 
-    @njit(error_model="numpy", refcount=False)
+    # inlined (numba IR), as are the method's small parts: a call per step, with the work
+    # tuple passed by value, cost DP5 15 % on the anchor scenes (1.23x -> 1.42x of C)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def land(t, hh, err, y, p, sq, work, rtol, atol, ctr):
         """After an accepted trial of size hh: if an event changed sign inside it, retake
         the step so that it ends on the earliest root. Returns (hh, err, retaken)."""

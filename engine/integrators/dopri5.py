@@ -158,7 +158,7 @@ def make_method(problem) -> Method:
     def alloc():
         return np.zeros((7, n)), np.zeros((1, n))   # stages k1..k7; scratch
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def restart(t0, t1, y, p, sq, fresh, mw, rtol, atol, st):
         """k1 at t0 (the FSAL stage is stale after a switch); at a start also h."""
         K, T = mw
@@ -169,21 +169,21 @@ def make_method(problem) -> Method:
         st[W_REJ] = 0.0
         return 2
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st):
         return 0
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def advance(mw):
         K = mw[0]
         for i in range(n):
             K[0, i] = K[6, i]   # FSAL
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def on_reject(err, hh, st):
         return hh * _factor(err, False)
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def on_accept(err_trial, hh_trial, err, hh, st):
         # from the trial: a landing on a kink says nothing about the smooth step size
         return hh_trial * _factor(err_trial, st[W_REJ] != 0.0)

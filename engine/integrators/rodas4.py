@@ -232,7 +232,7 @@ def make_method(problem) -> Method:
             M[i, i] += 1.0 / (hh * gamma)
         return invert(M, Minv)
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def restart(t0, t1, y, p, sq, fresh, mw, rtol, atol, st):
         """At the first segment of a point or after a switch, a new h."""
         R = mw[1]
@@ -244,7 +244,7 @@ def make_method(problem) -> Method:
         st[W_HOLD] = 0.0
         return 6 if fresh == FRESH_START else 2
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st):
         """Jacobian (and df/dt) at (t, y), kept through the rejections of this step."""
         R, J = mw[1], mw[2]
@@ -264,15 +264,15 @@ def make_method(problem) -> Method:
         return stages(t, hh, y, R[R_F0], R[R_FT], st[W_TDEP] != 0.0, Minv, p, sq, U,
                       R[R_YT], R[R_R], yn, rtol, atol)
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def advance(mw):
         pass
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def on_reject(err, hh, st):
         return hh / step_divisor(err)
 
-    @njit(error_model="numpy", refcount=False)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def on_accept(err_trial, hh_trial, err, hh, st):
         h_next = hh / accept_divisor(err, hh, st[W_HOLD], st[W_ERROLD], st[W_REJ] != 0.0)
         st[W_HOLD], st[W_ERROLD] = hh, max(1e-2, err)
