@@ -27,13 +27,21 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from . import attrs as A
+from .axes import axis_label, cell_edges, figure_format, is_log_spaced
 from .layout import atomic_write
-from .query import (NO_DATA, PU, STABLE, SU, effective_friction_curve, plane, stability_chart,
-                    zone_map)
+from .query import (
+    NO_DATA,
+    PU,
+    STABLE,
+    SU,
+    effective_friction_curve,
+    plane,
+    stability_chart,
+    zone_map,
+)
 
 FIGSIZE = (7.0, 5.0)
 DPI = 140
-SYMBOLS = {"W": r"$W$", "omega": r"$\omega$", "v_ref": r"$v_\mathrm{ref}$", "v_d": r"$v_d$"}
 NO_DATA_COLOUR = "#c8c8c8"
 STABILITY_COLOURS = {NO_DATA: NO_DATA_COLOUR, STABLE: "#ffffff", PU: "#e4572e", SU: "#4c72b0"}
 STABILITY_NAMES = {
@@ -60,73 +68,9 @@ def _grid_on_top(ax) -> None:
     ax.grid(True, color="0.25", alpha=0.18, linewidth=0.6)
 
 
-FORMATS = ("png", "pdf", "svg")
-
-
-def figure_format(path) -> str:
-    """The format ``path``'s suffix asks for, after checking it and its folder.
-
-    Raises ``ValueError`` (one line: what to do) for another suffix or a missing folder:
-    a figure is never written in a format its name does not say, nor into a folder the
-    user did not make.
-    """
-    path = Path(path)
-    fmt = path.suffix.lower().lstrip(".")
-    if fmt not in FORMATS:
-        raise ValueError(f"cannot write {path}: the file name must end in "
-                         f"{', '.join('.' + f for f in FORMATS)} (got {path.suffix or 'none'})")
-    folder = path.parent
-    if not folder.is_dir():
-        raise ValueError(f"cannot write {path}: the folder {folder} does not exist "
-                         f"(create it first: mkdir -p {folder})")
-    return fmt
-
-
 def _save(fig: Figure, path) -> Path:
     fmt = figure_format(path)
     return atomic_write(Path(path), lambda tmp: fig.savefig(tmp, format=fmt, dpi=DPI))
-
-
-def is_log_spaced(values: np.ndarray) -> bool:
-    """True for >= 3 positive values with a constant ratio and no constant step."""
-    v = np.sort(np.asarray(values, dtype=float))
-    if v.size < 3 or v[0] <= 0:
-        return False
-    step, ratio = np.diff(v), np.diff(np.log(v))
-    return bool(
-        np.allclose(ratio, ratio[0], rtol=1e-3) and not np.allclose(step, step[0], rtol=1e-3)
-    )
-
-
-def _edges(values: np.ndarray, log: bool) -> np.ndarray:
-    """Cell edges around sorted grid values (midpoints; geometric ones on a log axis)."""
-    v = np.log(values) if log else np.asarray(values, dtype=float)
-    if v.size == 1:
-        half = 0.5 * max(abs(v[0]), 1.0) if not log else 0.5
-        edges = np.array([v[0] - half, v[0] + half])
-    else:
-        mid = 0.5 * (v[1:] + v[:-1])
-        edges = np.concatenate([[2 * v[0] - mid[0]], mid, [2 * v[-1] - mid[-1]]])
-    return np.exp(edges) if log else edges
-
-
-# what a non-dimensional quantity is measured in, as its long_name says after a comma
-# (CF units are "1": store.cube), in the short form an axis label has room for
-MEASURED_IN = {"rad per unit of the non-dimensional time tau": r"[rad per unit $\tau$]",
-               "in units of the non-dimensional time tau": r"[$\tau$]"}
-
-
-def axis_label(coord: xr.DataArray) -> str:
-    """``"<symbol>  <long_name> [units]"`` ("non-dimensional" for units "1"; a long_name's
-    ", rad per unit of the non-dimensional time tau" becomes the unit)."""
-    name = str(coord.name)
-    units = coord.attrs.get("units", "")
-    unit_text = "(non-dimensional)" if units in ("1", "") else f"[{units}]"
-    long_name = coord.attrs.get("long_name", name)
-    head, _, tail = long_name.partition(", ")
-    if tail in MEASURED_IN:
-        long_name, unit_text = head, MEASURED_IN[tail]
-    return f"{SYMBOLS.get(name, name)}  {long_name} {unit_text}"
 
 
 def _title(ds: xr.Dataset, what: str, da: xr.DataArray, title: str | None) -> str:
@@ -154,8 +98,8 @@ def _shade(ax, da: xr.DataArray, colours: dict, x: str, y: str) -> tuple[bool, b
     bounds = [keys[0] - 0.5] + [k + 0.5 for k in keys]
     values = np.where(np.isnan(da.values.astype(float)), NO_DATA, da.values)
     ax.pcolormesh(
-        _edges(da[x].values, logx),
-        _edges(da[y].values, logy),
+        cell_edges(da[x].values, logx),
+        cell_edges(da[y].values, logy),
         values,
         cmap=ListedColormap([colours[k] for k in keys]),
         norm=BoundaryNorm(bounds, len(keys)),
@@ -172,7 +116,7 @@ def _shade(ax, da: xr.DataArray, colours: dict, x: str, y: str) -> tuple[bool, b
 def _fine(centres: np.ndarray, log: bool) -> np.ndarray:
     """Two sample points just inside each cell's edges, so a contour of a
     cell-replicated mask at 0.5 runs exactly along the cell edges of ``_shade``."""
-    edges = _edges(centres, log)
+    edges = cell_edges(centres, log)
     pad = 1e-4 * np.diff(edges)
     return np.column_stack([edges[:-1] + pad, edges[1:] - pad]).reshape(-1)
 
