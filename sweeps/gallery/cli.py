@@ -67,8 +67,17 @@ def _with_scene(func, positional: str):
 def _scene_sweep(args, spec: dict) -> str:
     """The id of the scene's sweep for ``map --scene``, computed first when the store does
     not hold it complete (a submit of the scene; a complete one returns at once)."""
-    from ..api import run_sweep
+    import sys
 
+    from ..api import run_sweep
+    from .scenes import get_scene
+
+    size = args.size or "full"
+    if not args.quiet:   # a full-size map may mean many minutes of compute: say so first
+        print(f"scene {args.scene} ({size}, {get_scene(args.scene).n_points(size)} points): "
+              f"computing its sweep unless the store holds it"
+              + ("; --size small for a quick look" if size == "full" else ""),
+              file=sys.stderr, flush=True)
     res = run_sweep(spec, args.store, progress=not args.quiet)
     if res.state != "done":
         raise RefusedError(f"scene {args.scene}: sweep {res.sweep_id} is {res.state}; "
