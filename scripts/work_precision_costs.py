@@ -21,7 +21,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import work_precision as wp
+import wp_core as wp
 
 from engine import params as P
 from engine import status as S

@@ -14,7 +14,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import work_precision as wp
+import wp_core as wp
 
 DOC = wp.DOCS / "ACCURACY.md"
 COLORS = {"rk4": "tab:blue", "dopri5": "tab:orange", "rodas4": "tab:green"}
