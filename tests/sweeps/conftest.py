@@ -62,15 +62,3 @@ def spec_file(tmp_path):
         path.write_text(text)
         return path
     return write
-
-
-def pytest_collection_modifyitems(config, items):
-    """Tests marked ``slow`` here (fault campaign, disk filling up mid-run) are opt-in, as
-    in tests/hard: ``scripts/test -m slow tests/sweeps``."""
-    if "slow" in (config.getoption("markexpr") or ""):
-        return
-    here = Path(__file__).parent
-    skip = pytest.mark.skip(reason="slow fault test: run with -m slow")
-    for item in items:
-        if "slow" in item.keywords and here in Path(str(item.fspath)).parents:
-            item.add_marker(skip)
