@@ -181,11 +181,13 @@ def cmd_query(args) -> int:
     return 0
 
 
-def cmd_map(args) -> int:
+def open_for_map(args):
+    """The cube ``map`` draws (``args.sweep``), after checking ``args.output``'s name and
+    folder (before any work) and with its stale and accuracy warnings said."""
     import store
 
     try:
-        store.figure_format(args.output)   # before any work: a name or folder refused
+        store.figure_format(args.output)
     except ValueError as exc:
         raise RefusedError(str(exc)) from None
     root = store_root(args.store)
@@ -193,6 +195,13 @@ def cmd_map(args) -> int:
     ds = store.open_cube(cube)
     _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
+    return ds
+
+
+def cmd_map(args) -> int:
+    import store
+
+    ds = open_for_map(args)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]
     try:

@@ -96,8 +96,7 @@ def _map_picked(args) -> int:
 
     import store
 
-    from ..cli.reading import _warn_stale, parse_sel
-    from ..lookup import resolve_sweep, store_root
+    from ..cli.reading import open_for_map, parse_sel
     from .scenes import shrink
 
     if args.kind != "friction":
@@ -107,14 +106,7 @@ def _map_picked(args) -> int:
         raise RefusedError("give --pick N or --sel W=VALUE, not both")
     if args.pick is not None and args.pick < 1:
         raise RefusedError(f"--pick: must be >= 1, got {args.pick}")
-    try:
-        store.figure_format(args.output)
-    except ValueError as exc:
-        raise RefusedError(str(exc)) from None
-    root = store_root(args.store)
-    sweep_id, cube = resolve_sweep(root, args.sweep)
-    ds = store.open_cube(cube)
-    _warn_stale(root, sweep_id, ds)
+    ds = open_for_map(args)
     grid = np.sort(ds.W.values)
     if args.pick is not None:
         keep = shrink(list(grid), args.pick)

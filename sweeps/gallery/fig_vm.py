@@ -58,6 +58,12 @@ def fig15(ctx) -> FigureResult:
         | {f"F_mean_v{v}": r.outputs["F_mean"] for v, r in zip(V_M, runs)}, choices=NOTES)
 
 
+def _no_long_stick(claim: str, longest) -> Check:
+    """The check that no sticking run at any v_m is longer than LONG."""
+    return Check(claim, ", ".join(f"v_m={v}: {m:.3g}" for v, m in zip(V_M, longest)),
+                 f"longest stick < {LONG} tau", bool(max(longest) < LONG))
+
+
 def fig16(ctx) -> FigureResult:
     runs, bare = _runs(ctx, True), _runs(ctx, False)
     png = _histories(ctx, "fig16", runs, f"Fig. 16: with dither W = {DITHER[0]}, omega = "
@@ -66,9 +72,7 @@ def fig16(ctx) -> FigureResult:
     F = [r.outputs["F_mean"] for r in runs]
     F0 = [r.outputs["F_mean"] for r in bare]
     checks = [
-        Check("dither suppresses long-duration stick-slip", ", ".join(
-            f"v_m={v}: {m:.3g}" for v, m in zip(V_M, longest)), f"longest stick < {LONG} tau",
-              bool(max(longest) < LONG)),
+        _no_long_stick("dither suppresses long-duration stick-slip", longest),
         Check("the dithered friction is reduced", ", ".join(
             f"v_m={v}: {a:.3g} vs {b:.3g}" for v, a, b in zip(V_M, F, F0)),
               "mean F with dither < without, every v_m", bool(all(a < b for a, b in zip(F, F0)))),
@@ -100,9 +104,7 @@ def fig17(ctx) -> FigureResult:
     stick = [r.outputs["stick_fraction"] for r in runs]
     longest = [r.outputs["max_stick"] for r in runs]
     checks = [
-        Check("long stick-slip replaced by short-duration phases", ", ".join(
-            f"v_m={v}: {m:.3g}" for v, m in zip(V_M, longest)), f"longest stick < {LONG} tau",
-              bool(max(longest) < LONG)),
+        _no_long_stick("long stick-slip replaced by short-duration phases", longest),
         monotone("the relative duration of short sticking increases with v_m", "stick share",
                  V_M, stick, increasing=True),
     ]
