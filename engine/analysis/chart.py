@@ -7,7 +7,7 @@ does not), so that the primary zone "extends over the whole range of reference v
 as the paper's Fig. 9 shows. That rule has one implementation,
 ``store.query.stability_labels`` (connected components by ``scipy.ndimage.label``); the
 engine may not import the store (tests/test_layering.py), so callers that want labels
-(scripts/fig09_stability_chart.py, the tests) pass :func:`stability_chart`'s
+(the gallery's Fig. 9: sweeps/gallery/fig_averaged.py, the tests) pass :func:`stability_chart`'s
 ``unstable`` / ``valid`` arrays to it::
 
     from store.query import stability_labels

@@ -2,6 +2,8 @@
 dither in the averaged theory next to the square wave."""
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from engine import params as P
@@ -15,6 +17,7 @@ FIG5_W = (0.25, 0.5, 1.0)       # not given by the paper; 0.5 is its Fig. 6 ampl
 FIG7_A = (0.5, 0.75)            # a Omega_f of Fig. 7
 SLOPE_TOL = 0.05                # relative, for a slope against its closed form
 H = 1e-6                        # finite-difference step of a slope at v = 0
+FINE_DW = 2e-5                  # W step of the fine look at Fig. 9(b): its strips are 1e-3-1e-2 wide
 
 
 def _slope0(f):
@@ -115,8 +118,8 @@ def fig07(ctx) -> FigureResult:
                  "full_dev": float(max(full_dev))},
         choices=["Eq. 5.19a lacks a factor 1/pi (Eq. 5.20 is right).",
                  "Eq. 5.20's outer branch is fc sgn(v) (printed fs jumps by 0.5 at |v| = a Omega).",
-                 "'One does not miss much' read as a largest gap below 0.2 fc between the "
-                 "full averaged LuGre (vd = 0.01) and Eq. 5.20."])
+                 ("'One does not miss much' read as a largest gap below 0.2 fc between the "
+                  "full averaged LuGre (vd = 0.01) and Eq. 5.20.")])
 
 
 def fig09(ctx) -> FigureResult:
@@ -143,12 +146,15 @@ def fig09(ctx) -> FigureResult:
     vref = float(row.v_ref)
     above_vref = row.values[row.W.values > vref]
     share = float(np.mean(above_vref == store.query.STABLE)) if above_vref.size else 0.0
+    strips = _thin_strips(ctx.small)
     n = {vd: {k: int((labels[vd] == code).sum()) for k, code in
               (("PU", store.query.PU), ("SU", store.query.SU))} for vd in labels}
     checks = [
         above("vd = 0.1: a primary unstable zone", "PU points", n[0.1]["PU"], 0),
         above("vd = 0.1: a secondary unstable zone", "SU points", n[0.1]["SU"], 0),
         below("vd = 0.01: the secondary zone disappears", "SU points", n[0.01]["SU"], 1),
+        Check("vd = 0.01: no secondary zone even on a fine W grid", strips.measured,
+              "no SU point", strips.count == 0),
         Check("at v_ref ~ vs, W above v_ref stabilises", f"at v_ref = {vref:.3g}: share of "
               f"W > v_ref that is stable {share:.3g}; least stable W {w_min:.3g}",
               "share == 1", bool(share == 1.0)),
@@ -159,12 +165,48 @@ def fig09(ctx) -> FigureResult:
         "higher v_ref); the secondary zone disappears for vd = 0.01; near v_ref ~ vs a dither "
         "with W > v_ref stabilises.", png, checks,
         numbers={"PU_0.1": n[0.1]["PU"], "SU_0.1": n[0.1]["SU"], "SU_0.01": n[0.01]["SU"],
-                 "W_stable_at_vs": w_min,
+                 "W_stable_at_vs": w_min, "fine_SU_vref_0.01": strips.count,
+                 "fine_SU_width_0.01": strips.widest,
                  "stable_share_above_vref": share},
         choices=["Eq. 6.6's second bracket uses sigma1(v - W) (printed v + W).",
                  "PU/SU by connected components touching W = 0 (docs/MODEL.md Sec. 5).",
-                 f"Grid of the fig09 scene at size {ctx.size} "
-                 f"({ds.sizes['W']} W x {ds.sizes['v_ref']} v_ref)."])
+                 (f"Fig. 9(b) looked at again on a fine grid (dW = {FINE_DW:g}, W in [0, 0.6], "
+                  f"{strips.n_vref} v_ref in [0.005, 0.295]), where thin strips hug W = v_ref."),
+                 (f"Grid of the fig09 scene at size {ctx.size} "
+                  f"({ds.sizes['W']} W x {ds.sizes['v_ref']} v_ref).")])
+
+
+class Strips(NamedTuple):
+    count: int          # v_ref values with an SU point on the fine grid
+    widest: float       # widest SU run in W
+    n_vref: int
+    measured: str
+
+
+def _thin_strips(small: bool, vd: float = 0.01) -> Strips:
+    """The SU points of the vd = 0.01 chart on a W grid fine enough to see strips a few
+    1e-3 wide along W = v_ref +- 0.01, which the scene's grid (dW >= 5e-3) steps over."""
+    import store
+
+    v = np.linspace(0.005, 0.295, 12 if small else 59)
+    W = np.arange(0.0, 0.6, FINE_DW)
+    c = engine_chart(W, v, P.pack(vd=vd))
+    su = store.query.stability_labels(c["unstable"], c["valid"], w_axis=0, v_ref_axis=1,
+                                      W=W) == store.query.SU
+    runs = [_longest_run(su[:, j]) * FINE_DW for j in range(v.size)]
+    offsets = [W[i] - v[j] for i, j in zip(*np.nonzero(su))]
+    count, widest = int(np.count_nonzero(runs)), float(max(runs))
+    where = (f", at W - v_ref in [{min(offsets):+.4f}, {max(offsets):+.4f}]"
+             if offsets else "")
+    return Strips(count, widest, v.size, f"SU strips at {count} of {v.size} v_ref, widest "
+                  f"{widest:.4f} in W{where}")
+
+
+def _longest_run(mask: np.ndarray) -> int:
+    """Length of the longest run of True in a 1-D mask."""
+    edges = np.diff(np.r_[0, mask.astype(np.int8), 0])
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    return int((ends - starts).max()) if starts.size else 0
 
 
 def beyond_sine(ctx) -> FigureResult:

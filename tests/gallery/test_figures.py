@@ -100,6 +100,32 @@ def test_fig09_zones(gallery):
     assert r.numbers["stable_share_above_vref"] == 1.0              # Sec. 6 text, v_ref ~ vs
 
 
+def test_fig09b_thin_strips_remain_at_vd_001(gallery):
+    """Fig. 9(b) shows no secondary zone for vd = 0.01, but a fine W grid finds thin SU
+    strips along W = v_ref + 0.01. Independent check at v_ref = 0.005: central differences
+    of the averaged right-hand side (Eqs. 6.4-6.6) at the equilibrium (Eq. 6.7) give an
+    unstable eigenvalue at W = 0.017, inside the strip, and none at W = 0.008 and 0.03, on
+    either side of it, so the strip is cut off from W = 0 (SU, not PU)."""
+    from engine.analysis.stability import averaged_rhs, equilibrium
+
+    r = gallery[0]["fig09"]
+    assert r.numbers["fine_SU_vref_0.01"] >= 1
+    assert 1e-3 < r.numbers["fine_SU_width_0.01"] < 2e-2
+    assert r.verdict != HOLDS       # the claim holds only at the scene's coarser grid
+
+    def growth(W, v_ref=0.005, vd=0.01):
+        x0 = np.array([float(c) for c in equilibrium(v_ref, W, P.pack(), vd=vd)])
+        J = np.empty((3, 3))
+        for k in range(3):
+            e = np.zeros(3)
+            e[k] = 1e-7 * max(1.0, abs(x0[k]))
+            J[:, k] = (averaged_rhs(x0 + e, v_ref, W, P.pack(), vd=vd)
+                       - averaged_rhs(x0 - e, v_ref, W, P.pack(), vd=vd)) / (2 * e[k])
+        return np.linalg.eigvals(J).real.max()
+
+    assert growth(0.017) > 0 > max(growth(0.008), growth(0.03))
+
+
 def test_fig10_quenching(gallery):
     r = gallery[0]["fig10"]
     assert r.numbers["p2p_0.1_W0.0"] > 0.5                # Fig. 10(a): self-sustained
