@@ -9,6 +9,7 @@ an HPC cluster"); ``scheduler=`` takes an address instead.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from .lookup import catalogue, resolve_sweep, stale_note, store_root
@@ -40,10 +41,28 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
     from .plan import make_plan
     from .run import submit
 
+    _refuse_in_spawned_import()
     if not isinstance(spec, Spec):
         spec = load_spec(spec, max_points=max_points)
     return submit(make_plan(spec), store_root(store), scheduler=scheduler, workers=workers,
                   progress=progress, client=client, dashboard=dashboard)
+
+
+def _refuse_in_spawned_import() -> None:
+    """Every dask worker process starts by importing the user's script again, as
+    ``__mp_main__`` (multiprocessing's 'spawn'). A script that calls :func:`run_sweep` at its
+    top level, not under ``if __name__ == "__main__":``, would have each worker run the
+    sweep again (and wait forever on the first run's lease): the worker says so in one line
+    and exits, and the submitter's cluster start fails (:func:`sweeps.cluster.dask_client`)."""
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_globals.get("__name__") == "__mp_main__":   # this worker dies quietly
+            print(f"ditherlab: error: a dask worker process imported "
+                  f"{frame.f_globals.get('__file__', 'your script')}, which calls run_sweep at "
+                  f"its top level: put the call under 'if __name__ == \"__main__\":'",
+                  file=sys.stderr, flush=True)
+            raise SystemExit(2)
+        frame = frame.f_back
 
 
 def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):

@@ -10,6 +10,10 @@ from contextlib import contextmanager
 log = logging.getLogger("ditherlab")
 
 
+class ClusterStartError(RuntimeError):
+    """The LocalCluster's workers did not start."""
+
+
 @contextmanager
 def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str | None = None):
     """A client on an existing cluster (``scheduler`` address) or on a LocalCluster of
@@ -35,8 +39,15 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
         return
     http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": ":0"}}
     with _sigint_ignored():   # workers are born ignoring Ctrl-C: their submitter stops them
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=dashboard, silence_logs=logging.ERROR, **http)
+        try:
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=dashboard, silence_logs=logging.CRITICAL,
+                                   **http)
+        except Exception as exc:  # noqa: BLE001 -- one line for dask's nested traceback
+            raise ClusterStartError(
+                f"the local dask workers did not start ({exc}); their own message is above. "
+                f"A script that calls run_sweep must do so under 'if __name__ == "
+                f"\"__main__\":' (each worker imports the script again)") from None
     with cluster, Client(cluster, set_as_default=False) as client:
         if dashboard:
             log.info("dask dashboard: %s", client.dashboard_link)

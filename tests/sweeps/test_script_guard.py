@@ -1,0 +1,46 @@
+"""A script that calls run_sweep at its top level, without ``if __name__ == "__main__":``,
+is imported again by every dask worker it starts (multiprocessing 'spawn'). It used to hang
+for ever (each worker attached to the sweep, waiting on the submitter's lease); now the
+workers refuse in one line and the submitter's cluster start fails at once."""
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+SPEC = ('{"name": "guard", "friction": "lugre", "dither": "none", "outputs": ["F_mean"], '
+        '"accuracy": "draft", "time": {"t_end": 2.0, "t_transient": 1.0}, '
+        '"grid": {"v_ref": [0.2, 0.4]}}')
+
+
+def _run(tmp_path, body: str) -> subprocess.CompletedProcess:
+    script = tmp_path / "user_script.py"
+    script.write_text(textwrap.dedent(f"""\
+        import json
+        import sweeps
+        spec = json.loads('{SPEC}')
+        """) + textwrap.dedent(body))
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, str(script)], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+def test_unguarded_script_is_refused_in_one_line(tmp_path):
+    out = _run(tmp_path, """\
+        res = sweeps.run_sweep(spec, "store", progress=False)
+        print("STATE", res.state)
+        """)
+    assert out.returncode != 0 and "STATE" not in out.stdout
+    assert "calls run_sweep at its top level: put the call under" in out.stderr
+    assert out.stderr.strip().splitlines()[-1].startswith("sweeps.cluster.ClusterStartError")
+
+
+def test_guarded_script_runs(tmp_path):
+    out = _run(tmp_path, """\
+        if __name__ == "__main__":
+            res = sweeps.run_sweep(spec, "store", progress=False)
+            print("STATE", res.state)
+        """)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert "STATE done" in out.stdout
