@@ -3,7 +3,26 @@
 Re-exports load their module on first use, so ``ditherlab --help`` does not import dask,
 numba or xarray.
 """
+import importlib.util as _util
+
 import lazy_loader as _lazy
+
+
+def _check_not_shadowed(*names: str) -> None:
+    """With an editable install (``pip install -e``), a folder named ``store`` or
+    ``engine`` in the folder of the running script (or the current folder under
+    ``python -m``) is found first, as an empty namespace package, and hides ditherlab's
+    own package: the run would fail later with a puzzling AttributeError. Say it now."""
+    for name in names:
+        spec = _util.find_spec(name)
+        if spec is not None and spec.origin is None and spec.submodule_search_locations:
+            where = ", ".join(spec.submodule_search_locations)
+            raise ImportError(f"the folder {where} hides ditherlab's '{name}' package (an "
+                              f"editable install looks in the script's folder first): rename "
+                              f"that folder or run from another folder")
+
+
+_check_not_shadowed("store", "engine")
 
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
