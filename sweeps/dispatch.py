@@ -16,7 +16,13 @@ from .sink import BlockSink
 
 
 def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
-               progress, timings, client=None, dashboard=None) -> None:
+               progress, timings, client=None, dashboard=None, filler=None,
+               warm_up: bool = True) -> None:
+    """Compute ``todo`` on the cluster. ``filler`` (e.g. a refined sweep's error sample,
+    sweeps.run_estimate.SampleRuns) gives tasks to run where a worker would otherwise
+    idle: once no block is left to submit, while fewer tasks than threads are running.
+    ``warm_up=False`` skips compiling the kernel on the workers (done by an earlier call on
+    the same client: ``client.run`` would wait for the filler tasks still running)."""
     bar = _progress_bar(plan, todo, progress)
     t = time.perf_counter()
     with (nullcontext(client) if client is not None
@@ -24,12 +30,12 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
         client = cluster_client
         timings["cluster_s"] = time.perf_counter() - t
         t = time.perf_counter()
-        warm = _warm_up_workers(client, plan, sink)
+        warm = _warm_up_workers(client, plan, sink) if warm_up else not sink.should_stop()
         timings["warm_up_s"] = time.perf_counter() - t
         t = time.perf_counter()
         if warm:
             sink.started()
-            _dispatch(client, plan, todo, sink, bar)
+            _dispatch(client, plan, todo, sink, bar, filler)
         timings["compute_s"] = time.perf_counter() - t
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
@@ -59,7 +65,8 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
     return True
 
 
-def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar) -> None:
+def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
+              filler=None) -> None:
     """Keep one block per worker thread (plus one) in flight, the next submitted as one
     finishes; once ``sink.should_stop()``, submit no more and collect those in flight (a
     stop loses no finished work and waits for at most one block per worker)."""
@@ -81,6 +88,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar) -> None
                                    plan.params, plan.numerics.settings, pure=False)
             inflight[future] = b
             done.add(future)
+        while filler is not None and not queue and \
+                len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
+            pass
 
     if not sink.should_stop():
         fill()

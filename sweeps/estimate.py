@@ -84,8 +84,8 @@ def sample(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
     """(flat indices, points ``(k, 4)``) of the error sample of ``plan``."""
     coords = [np.asarray(v) for v in plan.coords.values()]
     index = sample_index(tuple(len(v) for v in coords), coords, plan.sweep_id)
-    if plan.sources is not None:   # a refined sweep: the computed points the sample holds
-        index = np.unique(plan.sources[index])
+    if plan.refinement is not None:   # a refined sweep: the nearest first-level points,
+        index = plan.refinement.on_first_lattice(index)   # computed before any other
     return index, plan.points[index]
 
 

@@ -220,6 +220,15 @@ class Refinement:
         self.asked[flat] = True
         return flat
 
+    def on_first_lattice(self, flat: np.ndarray) -> np.ndarray:
+        """The nearest first-level lattice point of each flat index (sorted, unique): points
+        computed before any other level, known as soon as the refinement starts."""
+        multi = np.array(np.unravel_index(np.asarray(flat), self.shape))
+        for ax in self.axes:
+            lattice = _lattice(0, self.shape[ax] - 1, self.stride)
+            multi[ax] = lattice[np.abs(multi[ax][:, None] - lattice[None, :]).argmin(axis=1)]
+        return np.unique(np.ravel_multi_index(tuple(multi), self.shape))
+
     def sources(self) -> np.ndarray:
         """For every flat index, the computed point whose values it holds (itself when
         computed); call when :meth:`next_points` has returned nothing."""

@@ -19,12 +19,13 @@ from .sink import BlockSink
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (sweeps.estimate)
 
 
-def estimate_into(plan: Plan, client, sink: BlockSink, timings: dict) -> None:
+def estimate_into(plan: Plan, client, sink: BlockSink, timings: dict, started=None) -> None:
     """The error estimate (sweeps.estimate) of a finished simulated sweep, into its cube
-    and ``<sweep>/error_estimate.json``; a failure is recorded as a warning, never lost."""
+    and ``<sweep>/error_estimate.json``; a failure is recorded as a warning, never lost.
+    ``started``: a :class:`SampleRuns` some of whose re-runs are already submitted."""
     t = time.perf_counter()
     try:
-        estimate = _error_estimate(plan, client, sink.cube)
+        estimate = _error_estimate(plan, client, sink.cube, started)
     except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
         estimate = {"compared_with": None, "level": plan.numerics.label,
                     "sample_points": 0, "change": {}, "promise": {},
@@ -36,15 +37,52 @@ def estimate_into(plan: Plan, client, sink: BlockSink, timings: dict) -> None:
     timings["error_estimate_s"] = time.perf_counter() - t
 
 
-def _error_estimate(plan: Plan, client, cube) -> dict:
-    """Re-run the error sample one accuracy level finer on the cluster, one task per
-    point (sweeps.estimate), and compare."""
-    finer = errest.finer_numerics(plan)
-    index, pts = errest.sample(plan)
-    scene = plan.scene.with_(integrator=finer.integrator)
-    futures = [client.submit(task.compute_block, scene, pts[i:i + 1], plan.params, finer.settings,
-                             pure=False) for i in range(len(pts))]
-    parts = client.gather(futures)
+class SampleRuns:
+    """The error sample's re-runs one accuracy level finer, one task per point
+    (sweeps.estimate), costliest first, submitted one by one: a refined sweep hands them
+    to the dispatch as filler for the workers idling at the tail of each level (its
+    sample is known before its first level ends: sweeps.estimate.sample)."""
+
+    def __init__(self, plan: Plan):
+        from .plan import point_costs
+
+        self.plan, self.finer = plan, errest.finer_numerics(plan)
+        self.index, self.points = errest.sample(plan)
+        self.scene = plan.scene.with_(integrator=self.finer.integrator)
+        cost = point_costs(plan.spec, plan.coords)[self.index]
+        self.order = np.argsort(-cost, kind="stable")
+        self.futures: dict[int, object] = {}
+
+    def running(self) -> int:
+        return sum(not f.done() for f in self.futures.values())
+
+    def submit_next(self, client) -> bool:
+        """Submit the next re-run; False when all are submitted."""
+        if len(self.futures) == len(self.order):
+            return False
+        i = int(self.order[len(self.futures)])
+        self.futures[i] = client.submit(task.compute_block, self.scene,
+                                        self.points[i:i + 1], self.plan.params,
+                                        self.finer.settings, pure=False)
+        return True
+
+    def gather(self, client) -> list[dict]:
+        """Every re-run's result, in sample order (the rest submitted now)."""
+        while self.submit_next(client):
+            pass
+        results = client.gather([self.futures[i] for i in range(len(self.order))])
+        return results
+
+    def cancel(self, client) -> None:
+        client.cancel(list(self.futures.values()))
+
+
+def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None) -> dict:
+    """Gather the finer re-runs of the error sample (all submitted now unless some were
+    ``started``) and compare."""
+    runs = started or SampleRuns(plan)
+    index, finer = runs.index, runs.finer
+    parts = runs.gather(client)
     result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
               if k != "error"}
     return errest.compare(plan, cube, index, result, finer.label)

@@ -24,7 +24,7 @@ from .cluster import dask_client
 from .dispatch import run_blocks, run_blocks_local
 from .plan import Plan, balanced_blocks, point_costs
 from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
-from .run_estimate import estimate_into, needs_estimate
+from .run_estimate import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
 
 BLOCK_POINTS = {"simulate": 8, "averaged": 4096}   # points per block of a level (at most)
 
@@ -87,20 +87,30 @@ def infer(plan: Plan, cube) -> None:
 def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timings,
         client=None, dashboard=None) -> None:
     """Compute ``todo`` (the first unfinished level's blocks), then every further level,
-    infer the rest, and (simulate) estimate the error on computed points."""
+    infer the rest, and (simulate) estimate the error on computed points: its finer re-runs
+    run where a worker would idle at a level's tail (sweeps.dispatch ``filler``)."""
     simulate = plan.path == "simulate"
     own = simulate and client is None
     t = time.perf_counter()
     with (dask_client(scheduler, workers, dashboard) if own else nullcontext(client)) as c:
         timings["cluster_s"] = time.perf_counter() - t
         blocks = run_blocks if simulate or scheduler else run_blocks_local
+        # the error sample's finer re-runs fill the workers idling at each level's tail
+        early = SampleRuns(plan) if simulate and todo and not \
+            (sink.sweep.root / ESTIMATE_FILE).exists() else None
+        extra = {"filler": early} if early is not None else {}
         t, level = time.perf_counter(), 0
         while todo:
             blocks(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
-                   timings={}, client=c)
+                   timings={}, client=c, **extra)
+            extra = {**extra, "warm_up": False} if simulate or scheduler else extra
             if sink.stopped is not None:
+                if early is not None:
+                    early.cancel(c)
                 return
             todo, level = _advance(plan, sink.cube), level + 1
         timings["compute_s"] = time.perf_counter() - t
         if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-            estimate_into(plan, c, sink, timings)
+            estimate_into(plan, c, sink, timings, started=early)
+        elif early is not None:
+            early.cancel(c)
