@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import subprocess
 import sys
@@ -59,14 +60,24 @@ def fig09(refine: bool) -> dict:
     return {**spec, "refine": True} if refine else spec
 
 
-def submit(spec: dict, root: Path) -> tuple[float, str]:
-    """Wall seconds of `ditherlab submit` (a fresh process) and the sweep id."""
+def submit(spec: dict, root: Path) -> tuple[float, str, float]:
+    """Wall seconds of `ditherlab submit` (a fresh process), the sweep id, and the longest
+    time its progress display sat still while points were computed: the gap between two
+    writes of the progress bar (tqdm, to stderr), from its first to its last."""
     path = root / f"{spec['name']}.json"
     path.write_text(json.dumps(spec))
     t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "sweeps.cli", "submit", str(path), "-q", "--store",
-                    str(root / "store")], check=True, capture_output=True)
-    return time.perf_counter() - t0, sweeps.load_spec(spec).sweep_id
+    proc = subprocess.Popen([sys.executable, "-m", "sweeps.cli", "submit", str(path),
+                             "--store", str(root / "store")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    writes = []
+    while chunk := os.read(proc.stderr.fileno(), 65536):
+        if b"point" in chunk:                 # a progress-bar update ("12/961 [...point/s]")
+            writes.append(time.perf_counter())
+    if proc.wait() != 0:
+        raise RuntimeError(f"ditherlab submit {path} failed (exit {proc.returncode})")
+    still = float(np.max(np.diff(writes))) if len(writes) > 1 else float("nan")
+    return time.perf_counter() - t0, sweeps.load_spec(spec).sweep_id, still
 
 
 def classes(ds, kind: str) -> np.ndarray:
@@ -88,20 +99,21 @@ def estimate_s(spec: dict) -> float:
 
 
 def row(label: str, kind: str, full_spec: dict, ref_spec: dict, root: Path, skip_full: bool):
-    t_ref, ref_id = submit(ref_spec, root)
+    t_ref, ref_id, still = submit(ref_spec, root)
     ref = sweeps.open_sweep(ref_id, root / "store")
     n = int(ref["status"].size)
     if skip_full:
         t_full, agree = estimate_s(full_spec), float("nan")
         note = "full: plan estimate (not run)"
     else:
-        t_full, full_id = submit(full_spec, root)
+        t_full, full_id, still_full = submit(full_spec, root)
+        still = max(still, still_full)
         full = sweeps.open_sweep(full_id, root / "store")
         agree = float(np.mean(classes(full, kind) == classes(ref, kind)))
         note = ""
     k = computed(ref)
     print(f"{label:<22}{n:>8}{k:>10}{k / n:>8.1%}{t_full:>10.1f}{t_ref:>10.1f}"
-          f"{t_full / t_ref:>8.1f}x{agree:>10.2%}  {note}", flush=True)
+          f"{t_full / t_ref:>8.1f}x{agree:>10.2%}{still:>9.1f}  {note}", flush=True)
 
 
 def main() -> None:
@@ -110,9 +122,11 @@ def main() -> None:
                     help="Fig. 14 sizes whose full grid is estimated, not run (e.g. 61)")
     ap.add_argument("--sizes", type=int, nargs="*", default=[31, 61])
     args = ap.parse_args()
-    print(f"CPU: {cpu_model()}; {platform.python_version()}; 2 dask workers (default)")
+    print(f"Python {platform.python_version()}; 2 dask workers (default); 'still s': the "
+          f"longest time a progress display sat still while points were computed")
+    print(f"CPU: {cpu_model()}; load average at start {os.getloadavg()[0]:.2f}")
     print(f"{'map':<22}{'points':>8}{'computed':>10}{'share':>8}{'full s':>10}{'refined s':>10}"
-          f"{'ratio':>9}{'agree':>10}")
+          f"{'ratio':>9}{'agree':>10}{'still s':>9}")
     with tempfile.TemporaryDirectory() as tmp:
         root = Path(tmp)
         for n in args.sizes:
