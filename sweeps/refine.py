@@ -44,11 +44,12 @@ CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
 # e.g. a small unstable island, may hide inside)
 MARGIN_OUTPUT = {"averaged": "max_real_eig"}
 # lattice steps per map axis of the first level: a zone map's regions are large, while a
-# stability chart has thin secondary bands and small islands (and its points cost
-# microseconds): on Fig. 9 at 400x400 (v_d = 0.1) 8 steps (stride 64) missed an SU island
-# of about 10 x 16 cells (86 cells wrong), 32 steps (stride 16) find it for 17.9 % of the
-# points computed instead of 17.3 %
-FIRST_STEPS = {"simulate": 4, "averaged": 32}
+# stability chart has thin secondary bands (and its points cost microseconds)
+FIRST_STEPS = {"simulate": 4, "averaged": 8}
+# ... and small islands: its first stride is at most 16 grid steps. On Fig. 9 at 400x400
+# (v_d = 0.1) stride 64 missed an SU island of about 10 x 16 cells (86 cells wrong);
+# stride 16 finds it, computing 17.9 % of the points instead of 17.3 %
+MAX_FIRST_STRIDE = {"simulate": None, "averaged": 16}
 # paths whose split cells infer the new points on agreeing edges (module docstring)
 EDGE_INFERENCE = {"simulate": True, "averaged": False}
 COMPUTED, INFERRED, NOT_NEEDED = 0, 1, 2
@@ -180,7 +181,8 @@ class Refinement:
         self.path, self.shape = path, tuple(shape)
         self.axes = tuple(AXES.index(a) for a in PLANES[path])
         plane_shape = tuple(self.shape[i] for i in self.axes)
-        self.stride = coarse or max(default_stride(n, FIRST_STEPS[path]) for n in plane_shape)
+        stride = max(default_stride(n, FIRST_STEPS[path]) for n in plane_shape)
+        self.stride = coarse or min(stride, MAX_FIRST_STRIDE[path] or stride)
         others = [range(n) if i not in self.axes else [0] for i, n in enumerate(self.shape)]
         self._origins = np.stack(np.meshgrid(*others, indexing="ij"), -1).reshape(-1, 4)
         self.planes: list[Plane] = []
