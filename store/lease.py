@@ -128,10 +128,11 @@ class LeaseMixin:
 
     def beat(self, sweep_id: str, owner: str | None = None, **counts) -> bool:
         """The lease holder's heartbeat, with progress counts if given (``done_points``,
-        ``failed_points``, ``done_blocks``, ``run_started``, ``run_start_blocks``).
+        ``failed_points``, ``done_blocks``, ``n_blocks`` (a refined sweep's grow level by
+        level), ``run_started``, ``run_start_blocks``).
         False when ``owner`` no longer holds the lease: it must stop computing."""
         unknown = sorted(set(counts) - {"done_points", "failed_points", "done_blocks",
-                                        "run_started", "run_start_blocks"})
+                                        "n_blocks", "run_started", "run_start_blocks"})
         if unknown:
             raise ValueError(f"Catalogue.beat: unknown field(s) {unknown}")
         fields = {"heartbeat": time.time(), **counts}

@@ -52,6 +52,8 @@ class BlockSink:
 
     def _report(self, force: bool = False, **extra) -> None:
         if force or self.lease.due():
+            if self.plan.spec.refine:   # its blocks are known level by level
+                extra["n_blocks"] = len(self.plan.blocks)
             self.lease.progress(force=True, done_blocks=len(self.done), **point_counts(self.cube),
                                 **extra)
 
