@@ -216,7 +216,7 @@ class EngineQoI:
     from the dense output (``Problem.sampling``), as the anchor's dp5dense does.
     """
 
-    def __init__(self, method: str, dense: bool = False):
+    def __init__(self, method: str, dense: bool = False, kinks: bool = True):
         from numba import njit
 
         from engine import params as P
@@ -232,7 +232,7 @@ class EngineQoI:
         system = make_system(scene)
         obs, sample = qoi_observer(sampled=dense)
         problem = Problem(n=system.n, n_err=system.n_err, rhs=system.rhs,
-                          n_events=system.n_events, events=system.events,
+                          n_events=system.n_events if kinks else 0, events=system.events,
                           observe=obs.observe, record=False, needs_mid=False,
                           sampling=dense, sample=sample)
         stepper = METHODS[method].make_stepper(problem)
@@ -250,7 +250,7 @@ class EngineQoI:
             return st
 
         self.method, self.dense, self.run_jit, self.ok = method, dense, run, S.OK
-        self.label = method + (" dense" if dense else "")
+        self.label = method + (" dense" if dense else "") + ("" if kinks else " nokink")
         self.work = stepper.alloc()
         self.y, self.o, self.out = np.empty(n), np.empty(4), np.empty(5)
         self.ctr = np.zeros(CTR_SIZE, np.int64)
@@ -316,14 +316,18 @@ def speed_row(scene, acc, m, hit, t, ratio=None, ratio_same=None, vs_best=None):
             "ratio": ratio, "ratio_same": ratio_same, "vs_best": vs_best}
 
 
-def table_speed(anchor: Anchor, methods, refs, repeats: int):
+def table_speed(anchor: Anchor, methods, refs, repeats: int, nokink: bool = False):
     """Table 1: cheapest setting per (scene, accuracy, method), timed paired with C.
 
     ``ratio`` = engine / C of the same algorithm, each at its own cheapest setting;
     ``ratio_same`` = engine / C at the engine's setting (same steps: implementation cost).
+    ``nokink`` adds each method without kink landing (``nokink``: no event functions,
+    like the C anchor, which lands on the square wave's switches only): the engine's
+    driver against C doing the same work.
     """
     engines = [EngineQoI(m) for m in methods]
     engines += [EngineQoI(e.method, dense=True) for e in engines if e.adaptive]
+    engines += [EngineQoI(m, kinks=False) for m in methods] if nokink else []
     for eng in engines:                                # compile outside the timings
         eng.run(0.4, settings_for(eng.method)[0])
     rows = []
@@ -343,7 +347,7 @@ def table_speed(anchor: Anchor, methods, refs, repeats: int):
                                  "setting": "not reached"})
                     continue
                 fns = [eng.runner(W, hit[0])] + list(c_fns.values())
-                same = C_OF.get(m)
+                same = C_OF.get(m.removesuffix(" nokink"))
                 if same:
                     fns.append(lambda s=hit[0], cm=same, W=W: anchor.run(cm, W, s))
                 times = paired_medians(fns, repeats)
@@ -364,7 +368,7 @@ def print_speed(rows):
           "time: median of paired repeats)")
     print("  ratio C = engine / C same algorithm, each at its cheapest setting; same-N = at the "
           "engine's setting (same steps); vs best = engine / cheapest C of any algorithm")
-    hdr = (f"{'scene':9s} {'acc':>6s} {'method':12s} {'setting':11s} {'error':>9s} "
+    hdr = (f"{'scene':9s} {'acc':>6s} {'method':14s} {'setting':11s} {'error':>9s} "
            f"{'time ms':>9s} {'steps':>9s} {'evals':>10s} {'ns/eval':>8s} {'ratio C':>8s} "
            f"{'same-N':>7s} {'vs best':>8s}")
     print(hdr)
@@ -372,9 +376,9 @@ def print_speed(rows):
     x = lambda v: f"{v:.2f}x" if v else "-"
     for r in rows:
         if "error" not in r:
-            print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:12s} {r['setting']}")
+            print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:14s} {r['setting']}")
             continue
-        print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:12s} {r['setting']:11s} "
+        print(f"{r['scene']:9s} {r['acc']:6.0e} {r['method']:14s} {r['setting']:11s} "
               f"{r['error']:9.2e} {1e3 * r['t']:9.3f} {r['steps']:9d} {r['evals']:10d} "
               f"{r['ns']:8.1f} {x(r['ratio']):>8s} {x(r['ratio_same']):>7s} "
               f"{x(r['vs_best']):>8s}")
@@ -522,15 +526,17 @@ def main(argv=None):
     ap.add_argument("--scipy-cap", type=float, default=120.0, help="time cap per scipy run (s)")
     ap.add_argument("--no-effects", action="store_true", help="skip the effects table")
     ap.add_argument("--no-stiff", action="store_true", help="skip the stiff-contact table")
+    ap.add_argument("--nokink", action="store_true",
+                    help="also time each method without kink landing (as the C anchor)")
     args = ap.parse_args(argv)
     anchor = Anchor()
     print_machine(anchor)
     refs = read_references()
-    rows = table_speed(anchor, args.methods.split(","), refs, args.repeats)
+    rows = table_speed(anchor, args.methods.split(","), refs, args.repeats, args.nokink)
     print_speed(rows)
     if not args.no_scipy:
         eng = [r for r in rows if r["scene"] == "fig10" and r["acc"] == 1e-4 and "t" in r
-               and not r["method"].startswith("C ")]
+               and not r["method"].startswith("C ") and "nokink" not in r["method"]]
         best = min(eng, key=lambda r: r["t"])
         table_scipy(best["t"], f"{best['method']} {best['setting']}", refs["fig10"], args.scipy_cap)
     if not args.no_effects:
