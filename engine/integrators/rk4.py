@@ -83,7 +83,9 @@ def make_stepper(problem) -> Stepper:
         # rows k1..k4, yt, y0, ym, ytmp; Q: dense coefficients; state[0]: next sampling index
         return np.empty((8, n)), np.empty((3, n)), np.zeros(1)
 
-    @njit(error_model="numpy", refcount=False)
+    # inlined into the driver's loop over stops: with 1-2 steps per half-period the call
+    # per segment cost ~15 % (1.19x -> 1.02x of C on the anchor scenes)
+    @njit(inline="always", error_model="numpy", refcount=False)
     def segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec):
         R, Q, state = work
         k1, k2, k3, k4, yt, y0, ym, ytmp = R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7]
