@@ -155,3 +155,59 @@ def static_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarray, list
         if abs(hold(t, e)) > fb:
             raise NotImplementedError("slip reversal without sticking: not needed by the tests")
     return np.array([e, v]), sticks
+
+
+def static_square_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarray, list]:
+    """Square-velocity dithered slider with a static law as a hybrid automaton, from rest.
+
+    Between switches ``k pi / omega`` the dither sign ``sq`` is fixed (+1 on the first half
+    period) and ``u = v + W sq``. Stick: ``u = 0`` held exactly (``v = -W sq``,
+    ``de = v_ref + W sq``) until ``|e + f_slow| > f_break`` or the next switch (where ``u``
+    jumps by ``2 W``). Slip: Eq. 2.2 until ``u`` reaches 0, then stick if
+    ``|e + f_slow| <= f_break``, else slip on in the sense of the holding force. Returns
+    ``(e, v)`` at ``t_end`` and the list of (start, end) sticking intervals.
+    """
+    fb = d["fs"] if law == "stribeck" else d["fc"]
+    W, hp = d["W"], np.pi / d["omega"]
+    hold = lambda t, e: e + d["slow_a"] * np.sin(d["slow_omega"] * t)
+    t, e, v, k, stuck, sgn, sticks = 0.0, 0.0, 0.0, 0, False, 1.0, []
+    while t < t_end:
+        sq = 1.0 if k % 2 == 0 else -1.0
+        t_sw = min((k + 1) * hp, t_end)
+        if not stuck and v + W * sq != 0.0:
+            sgn = np.sign(v + W * sq)
+        while t < t_sw:
+            if stuck:
+                brk = lambda tt, yy: abs(hold(tt, yy[0])) - fb
+                brk.terminal = True
+                sol = solve_ivp(lambda tt, yy: [d["v_ref"] + W * sq], (t, t_sw), [e],
+                                events=brk, method="DOP853", rtol=RTOL, atol=ATOL)
+                sticks.append((t, sol.t[-1]))
+                t, e, v = sol.t[-1], sol.y[0, -1], -W * sq
+                if sol.status != 1:
+                    break                            # the switch ends the stick
+                stuck, sgn = False, np.sign(hold(t, e))
+                continue
+
+            def rhs(tt, yy, sgn=sgn):
+                u = yy[1] + W * sq
+                return [d["v_ref"] - yy[1],
+                        hold(tt, yy[0]) - friction(u if u != 0 else sgn * 1e-300, 0.0, d, law)[1]]
+
+            def stop(tt, yy, t0=t, sgn=sgn):
+                return yy[1] + W * sq if tt > t0 + NUDGE else sgn
+            stop.terminal = True
+            sol = solve_ivp(rhs, (t, t_sw), [e, v], events=stop, method="DOP853",
+                            rtol=RTOL, atol=ATOL)
+            t, e, v = sol.t[-1], sol.y[0, -1], sol.y[1, -1]
+            if sol.status != 1:
+                break
+            if abs(hold(t, e)) <= fb:
+                stuck, v = True, -W * sq
+            else:
+                sgn = np.sign(hold(t, e))              # slip reversal
+        if stuck:
+            stuck = False                              # u jumps by 2 W at the switch
+            sgn = -sq
+        k += 1
+    return np.array([e, v]), sticks
