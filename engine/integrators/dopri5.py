@@ -54,8 +54,6 @@ TABLEAU = ButcherTableau(
     ],
 )
 SAFETY, FAC_MIN, FAC_MAX = 0.9, 0.2, 10.0
-LANDING_FLOOR = 1e-12  # landings shorter than this times max(1, |t|) cross the corner instead
-MAX_SHORT = math.inf   # a landing falling short of its kink is retried by the next step
 
 def _make_attempt(tab, n, n_err, rhs):
     """njit ``attempt(t, hh, y, yn, p, sq, mw, rtol, atol, st) -> err``: stages 2..7 (k1
@@ -189,7 +187,7 @@ def make_method(problem) -> Method:
         return hh_trial * _factor(err_trial, st[W_REJ] != 0.0)
 
     return Method(alloc, 0, 4, 6, restart, prepare, attempt, coeffs, dense_eval, advance,
-                  on_reject, on_accept, LANDING_FLOOR, MAX_SHORT)
+                  on_reject, on_accept)
 
 
 def make_stepper(problem) -> Stepper:

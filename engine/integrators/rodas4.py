@@ -80,8 +80,6 @@ TABLEAU = RosenbrockTableau(
            [-0.6762803392801253, 6.087714651680015, 16.43084320892478, 24.76722511418386,
             -6.594389125716872, 0.0]],
 )
-LANDING_FLOOR = 0.0  # every landing is taken, however short
-MAX_SHORT = 2        # landings in a row that fall short of the same kink before it is passed
 # the method's scalar slots in the driver's state: the last accepted step and its error
 # (for the predictive controller), and whether f depends on t
 W_HOLD, W_ERROLD, W_TDEP = W_METHOD, W_METHOD + 1, W_METHOD + 2
@@ -279,7 +277,7 @@ def make_method(problem) -> Method:
         return h_next
 
     return Method(alloc, 3, 3, s - 1, restart, prepare, attempt, coeffs, dense_eval, advance,
-                  on_reject, on_accept, LANDING_FLOOR, MAX_SHORT)
+                  on_reject, on_accept)
 
 
 def make_stepper(problem) -> Stepper:
