@@ -11,6 +11,8 @@ Targets (issue 11): refined Fig. 14 31x31 <= 25 % of points, >= 99 % agreement, 
 
     python scripts/bench_maps.py                 # everything (the full 61x61 takes long)
     python scripts/bench_maps.py --skip-full 61  # the 61x61 full grid from its plan estimate
+    python scripts/bench_maps.py --skip-full 61 --full-from STORE   # ... agreement with a
+                                                 # full 61x61 cube computed before in STORE
 """
 from __future__ import annotations
 
@@ -98,13 +100,18 @@ def estimate_s(spec: dict) -> float:
     return next(e.wall_s for e in estimates(sweeps.load_spec(spec)) if e.level == level)
 
 
-def row(label: str, kind: str, full_spec: dict, ref_spec: dict, root: Path, skip_full: bool):
+def row(label: str, kind: str, full_spec: dict, ref_spec: dict, root: Path, skip_full: bool,
+        full_from: Path | None = None):
     t_ref, ref_id, still = submit(ref_spec, root)
     ref = sweeps.open_sweep(ref_id, root / "store")
     n = int(ref["status"].size)
     if skip_full:
         t_full, agree = estimate_s(full_spec), float("nan")
         note = "full: plan estimate (not run)"
+        if full_from is not None:   # a full grid computed earlier: its classes, not its time
+            full = sweeps.open_sweep(full_spec["name"], full_from)
+            agree = float(np.mean(classes(full, kind) == classes(ref, kind)))
+            note += f"; agreement with the full cube in {full_from}"
     else:
         t_full, full_id, still_full = submit(full_spec, root)
         still = max(still, still_full)
@@ -121,6 +128,10 @@ def main() -> None:
     ap.add_argument("--skip-full", type=int, nargs="*", default=[],
                     help="Fig. 14 sizes whose full grid is estimated, not run (e.g. 61)")
     ap.add_argument("--sizes", type=int, nargs="*", default=[31, 61])
+    ap.add_argument("--full-from", type=Path, default=None,
+                    help="a store holding full grids computed earlier (`ditherlab submit` "
+                         "of the spec this script writes, name bench-fig14-N): the sizes "
+                         "in --skip-full are compared with them for agreement")
     args = ap.parse_args()
     print(f"Python {platform.python_version()}; 2 dask workers (default); 'still s': the "
           f"longest time a progress display sat still while points were computed")
@@ -131,7 +142,7 @@ def main() -> None:
         root = Path(tmp)
         for n in args.sizes:
             row(f"Fig. 14 {n}x{n} standard", "zone", fig14(n, False), fig14(n, True), root,
-                n in args.skip_full)
+                n in args.skip_full, args.full_from)
         row("Fig. 9 400x400 averaged", "chart", fig09(False), fig09(True), root, False)
 
 

@@ -5,9 +5,12 @@ from __future__ import annotations
 import logging
 import signal
 import threading
+import time
 from contextlib import contextmanager
 
 log = logging.getLogger("ditherlab")
+
+NOTICE_AFTER_S = 3.0   # a warm-up longer than this is a first compilation: say so
 
 
 class ClusterStartError(RuntimeError):
@@ -55,11 +58,89 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
         yield client
 
 
+class EarlyStart:
+    """A LocalCluster started, and the run's kernel compiled on its workers, in a thread
+    while the submitter still prepares its cube (rebuild, first publish): on a refined
+    Fig. 14 map that preparation takes about a second, cluster start and warm-up two.
+
+    Made on the main thread once the sweep's lease is taken. SIGINT is ignored until the
+    workers are up, so they are born ignoring it (as with :func:`dask_client`); a Ctrl-C in
+    that second is dropped. ``warm`` is ``(fn, *args)``, run on every worker once they are
+    up (sweeps.task.warm_up)."""
+
+    def __init__(self, workers: int, dashboard: str | None, warm: tuple):
+        self._cm = dask_client(None, workers, dashboard)
+        self._client = None
+        self._error: BaseException | None = None
+        self._up = threading.Event()          # the cluster is started, or failed to
+        self._closing = False
+        self._previous = None
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+        self._thread = threading.Thread(target=self._start, args=(warm,), daemon=True,
+                                        name="ditherlab-cluster-start")
+        self._thread.start()
+
+    def _start(self, warm: tuple) -> None:
+        try:
+            self._client = self._cm.__enter__()
+        except BaseException as exc:  # noqa: BLE001 -- handed to the main thread
+            self._error = exc
+            return
+        finally:
+            self._up.set()
+        try:
+            self._client.run(*warm)
+        except BaseException as exc:  # noqa: BLE001 -- handed to the main thread
+            if not self._closing:
+                self._error = exc
+
+    def _wait(self, done, should_stop, notice) -> bool:
+        t0 = time.monotonic()
+        while not done():
+            if should_stop():
+                return False
+            if notice is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
+                notice()
+                notice = None
+            time.sleep(0.05)
+        return True
+
+    def _restore_sigint(self) -> None:
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+    def client(self, should_stop=lambda: False, notice=None):
+        """The client once its workers are warm; None if ``should_stop()`` turned true
+        while waiting (a first compilation can take a minute on a busy machine). Calls
+        ``notice()`` once if the wait exceeds NOTICE_AFTER_S. Raises what the start
+        raised (ClusterStartError)."""
+        if not self._wait(self._up.is_set, should_stop, None):
+            return None
+        self._restore_sigint()
+        if not self._wait(lambda: not self._thread.is_alive(), should_stop, notice):
+            return None
+        if self._error is not None:
+            raise self._error
+        return self._client
+
+    def close(self) -> None:
+        """Close the cluster (a warm-up still running ends with it)."""
+        self._up.wait()
+        self._restore_sigint()
+        if self._client is not None:
+            self._closing = True
+            self._cm.__exit__(None, None, None)
+        self._thread.join()
+
+
 @contextmanager
 def _sigint_ignored():
     """SIGINT ignored while local workers are spawned (they inherit it), so a Ctrl-C in the
     terminal, which reaches the whole process group, stops the submitter cleanly instead
-    of printing a traceback from every worker. A Ctrl-C in these seconds is dropped."""
+    of printing a traceback from every worker. A Ctrl-C in these seconds is dropped.
+    Off the main thread it does nothing (:class:`EarlyStart` ignores SIGINT itself)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return

@@ -29,6 +29,8 @@ from engine import status as S
 from store.catalogue_db import FINAL
 
 from . import history
+from . import task
+from .cluster import EarlyStart
 from .cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
 from .lease import LEASE_LOST, Lease
@@ -94,6 +96,10 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     if lease is None:
         return attached_result(plan, sweep, attached, t0)
     sink, timings = None, {}
+    # a local cluster starts (and compiles the kernel) while the cube is prepared below
+    early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
+                                            plan.numerics.settings)) \
+        if plan.path == "simulate" and client is None and scheduler is None else None
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
@@ -108,13 +114,25 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         if plan.spec.refine:
             from .run_refined import run
         if todo or needs_estimate(plan, sweep, cube):
-            run(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
-                timings=timings, client=client, dashboard=dashboard)
+            extra, t = {}, time.perf_counter()
+            if early is not None:   # its workers are warm: the kernel compiled there
+                client = early.client(sink.should_stop, _compiling if progress else None)
+                extra = {"warm_up": False}
+            waited = time.perf_counter() - t
+            if early is None or client is not None:   # else stopped while it started
+                run(plan, todo, sink, scheduler=scheduler, workers=workers,
+                    progress=progress, timings=timings, client=client, dashboard=dashboard,
+                    **extra)
+            if early is not None:
+                timings["cluster_s"] = waited
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
             store.publish(cube, sweep.cube)
     except BaseException as exc:
         abort(plan, sink, lease, exc, serving=stop is not None)
         raise
+    finally:
+        if early is not None:
+            early.close()
     if "compute_s" in timings and max_blocks is None and sink.stopped is None:
         history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
                               timings["compute_s"])
@@ -123,6 +141,11 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     return final_result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run, t0=t0,
                         timings=timings, lease=lease, stopped=sink.stopped,
                         max_blocks=max_blocks)
+
+
+def _compiling() -> None:
+    print("ditherlab: compiling the engine for this scene on the workers (its first run "
+          "here; cached for later runs)", file=sys.stderr, flush=True)
 
 
 def _checked_blocks(plan: Plan):

@@ -85,7 +85,7 @@ def infer(plan: Plan, cube) -> None:
 
 
 def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timings,
-        client=None, dashboard=None) -> None:
+        client=None, dashboard=None, warm_up: bool = True) -> None:
     """Compute ``todo`` (the first unfinished level's blocks), then every further level,
     infer the rest, and (simulate) estimate the error on computed points: its finer re-runs
     run where a worker would idle at a level's tail (sweeps.dispatch ``filler``)."""
@@ -99,6 +99,7 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
         early = SampleRuns(plan) if simulate and todo and not \
             (sink.sweep.root / ESTIMATE_FILE).exists() else None
         extra = {"filler": early} if early is not None else {}
+        extra = extra if warm_up else {**extra, "warm_up": False}
         t, level = time.perf_counter(), 0
         while todo:
             blocks(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
