@@ -64,8 +64,8 @@ class EarlyStart:
     Fig. 14 map that preparation takes about a second, cluster start and warm-up two.
 
     Made on the main thread once the sweep's lease is taken. SIGINT is ignored until the
-    workers are up, so they are born ignoring it (as with :func:`dask_client`); a Ctrl-C in
-    that second is dropped. ``warm`` is ``(fn, *args)``, run on every worker once they are
+    workers are up and the submitter asks for the client, so they are born ignoring it (as
+    with :func:`dask_client`); a Ctrl-C in those one or two seconds is dropped. ``warm`` is ``(fn, *args)``, run on every worker once they are
     up (sweeps.task.warm_up)."""
 
     def __init__(self, workers: int, dashboard: str | None, warm: tuple):
@@ -74,8 +74,8 @@ class EarlyStart:
         self._error: BaseException | None = None
         self._up = threading.Event()          # the cluster is started, or failed to
         self._closing = False
-        self._previous = None
-        if threading.current_thread() is threading.main_thread():
+        self._ignoring = threading.current_thread() is threading.main_thread()
+        if self._ignoring:
             self._previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
         self._thread = threading.Thread(target=self._start, args=(warm,), daemon=True,
                                         name="ditherlab-cluster-start")
@@ -107,9 +107,10 @@ class EarlyStart:
         return True
 
     def _restore_sigint(self) -> None:
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
+        if self._ignoring:   # None: a handler not set from Python; the default then
+            signal.signal(signal.SIGINT, self._previous if self._previous is not None
+                          else signal.default_int_handler)
+            self._ignoring = False
 
     def client(self, should_stop=lambda: False, notice=None):
         """The client once its workers are warm; None if ``should_stop()`` turned true
