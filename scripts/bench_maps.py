@@ -101,17 +101,20 @@ def estimate_s(spec: dict) -> float:
 
 
 def row(label: str, kind: str, full_spec: dict, ref_spec: dict, root: Path, skip_full: bool,
-        full_from: Path | None = None):
+        full_from: list[Path] | None = None):
     t_ref, ref_id, still = submit(ref_spec, root)
     ref = sweeps.open_sweep(ref_id, root / "store")
     n = int(ref["status"].size)
     if skip_full:
         t_full, agree = estimate_s(full_spec), float("nan")
         note = "full: plan estimate (not run)"
-        if full_from is not None:   # a full grid computed earlier: its classes, not its time
-            full = sweeps.open_sweep(full_spec["name"], full_from)
-            agree = float(np.mean(classes(full, kind) == classes(ref, kind)))
-            note += f"; agreement with the full cube in {full_from}"
+        full_id = sweeps.load_spec(full_spec).sweep_id
+        for where in full_from or []:   # a full grid computed earlier: its classes, not its time
+            if (where / full_id / "cube.nc").exists():
+                full = sweeps.open_sweep(full_id, where)
+                agree = float(np.mean(classes(full, kind) == classes(ref, kind)))
+                note += f"; agreement with the full cube in {where}"
+                break
     else:
         t_full, full_id, still_full = submit(full_spec, root)
         still = max(still, still_full)
@@ -128,10 +131,10 @@ def main() -> None:
     ap.add_argument("--skip-full", type=int, nargs="*", default=[],
                     help="Fig. 14 sizes whose full grid is estimated, not run (e.g. 61)")
     ap.add_argument("--sizes", type=int, nargs="*", default=[31, 61])
-    ap.add_argument("--full-from", type=Path, default=None,
-                    help="a store holding full grids computed earlier (`ditherlab submit` "
-                         "of the spec this script writes, name bench-fig14-N): the sizes "
-                         "in --skip-full are compared with them for agreement")
+    ap.add_argument("--full-from", type=Path, nargs="*", default=[],
+                    help="stores holding full grids computed earlier (the same spec under "
+                         "any name, e.g. the gallery's fig14 for 31): the sizes in "
+                         "--skip-full are compared with them for agreement")
     args = ap.parse_args()
     print(f"Python {platform.python_version()}; 2 dask workers (default); 'still s': the "
           f"longest time a progress display sat still while points were computed")
