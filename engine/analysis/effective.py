@@ -25,21 +25,7 @@ import numpy as np
 
 from .. import params as P
 from ..jit import njit
-from .quadrature import (
-    DA,
-    DB,
-    DC,
-    DS,
-    N_AVG,
-    N_QUAD,
-    A,
-    B,
-    C,
-    S,
-    gauss_legendre,
-    phase_average,
-    rule_code,
-)
+from .quadrature import DA, DB, DC, DS, N_QUAD, A, B, C, S, point_averages
 
 LUGRE, NO_DAMPING, STATIC = 0, 1, 2
 MODELS = {"lugre": LUGRE, "no-damping": NO_DAMPING, "static": STATIC}
@@ -67,13 +53,9 @@ def force_and_slope(avg, v, sigma2, model):
 
 
 @njit(cache=True, error_model="numpy")
-def _kernel(v, W, vd, p, sigma2, rule, model, x, wx, side, F, dF):
-    avg = np.empty(N_AVG)
-    pv = p.copy()   # the point's parameters: vd varies along the grid
+def _forces(avg, v, sigma2, model, F, dF):
     for i in range(v.size):
-        pv[P.VD] = vd[i]
-        phase_average(avg, v[i], W[i], rule, x, wx, pv, side)
-        F[i], dF[i] = force_and_slope(avg, v[i], sigma2, model)
+        F[i], dF[i] = force_and_slope(avg[i], v[i], sigma2, model)
 
 
 def effective_friction(v, W, p, *, dither="square-velocity", model="lugre", vd=None,
@@ -104,14 +86,11 @@ def effective_friction(v, W, p, *, dither="square-velocity", model="lugre", vd=N
     -------
     F : ndarray, broadcast shape of (v, W, vd); ``(F, dFdv)`` if ``slope``.
     """
-    v, W, vd = np.broadcast_arrays(np.asarray(v, float), np.asarray(W, float),
-                                   np.asarray(p[P.VD] if vd is None else vd, float))
-    x, wx = gauss_legendre(n_quad)
+    code = model_code(model)
+    shape, v, avg = point_averages(v, W, p, dither=dither, vd=vd, n_quad=n_quad, side=side)
     F, dF = np.empty(v.size), np.empty(v.size)
-    _kernel(np.ascontiguousarray(v).ravel(), np.ascontiguousarray(W).ravel(),
-            np.ascontiguousarray(vd).ravel(), np.array(p, dtype=np.float64), float(p[P.SIGMA2]),
-            rule_code(dither), model_code(model), x, wx, float(side), F, dF)
-    F, dF = F.reshape(v.shape), dF.reshape(v.shape)
+    _forces(avg, v, float(p[P.SIGMA2]), code, F, dF)
+    F, dF = F.reshape(shape), dF.reshape(shape)
     return (F, dF) if slope else F
 
 

@@ -24,6 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .. import params as P
 from ..jit import njit
 from .integrands import abc
 
@@ -104,3 +105,26 @@ def phase_average(out, v, W, rule, x, wx, p, side):
         _add_piece(out, v, Wa, phi0, np.pi, x, wx, p, side)
     else:
         _add_piece(out, v, Wa, 0.0, np.pi, x, wx, p, side)
+
+
+@njit(cache=True, error_model="numpy")
+def _averages_kernel(v, W, vd, p, rule, x, wx, side, out):
+    pv = p.copy()   # the point's parameters: vd varies along the grid
+    for i in range(v.size):
+        pv[P.VD] = vd[i]
+        phase_average(out[i], v[i], W[i], rule, x, wx, pv, side)
+
+
+def point_averages(v, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, side=1.0):
+    """The phase averages at every point of ``(v, W, vd)`` broadcast together (``vd``
+    default ``p[VD]``): ``(shape, v, avg)`` with ``v`` the flat slow velocities and ``avg``
+    their ``(n, 8)`` averages, indexed by :data:`A` ... :data:`DS`. The one loop over points
+    of the averaged path (effective friction, Jacobians, averages)."""
+    b = np.broadcast_arrays(*[np.asarray(a, float)
+                              for a in (v, W, p[P.VD] if vd is None else vd)])
+    v, w, d = (np.ascontiguousarray(a).ravel() for a in b)
+    x, wx = gauss_legendre(n_quad)
+    avg = np.empty((v.size, N_AVG))
+    _averages_kernel(v, w, d, np.array(p, dtype=np.float64), rule_code(dither), x, wx,
+                     float(side), avg)
+    return b[0].shape, v, avg

@@ -34,7 +34,7 @@ import numpy as np
 from .. import params as P
 from ..jit import njit
 from .effective import LUGRE, force_and_slope
-from .quadrature import DA, DB, DC, N_AVG, N_QUAD, A, B, C, gauss_legendre, phase_average, rule_code
+from .quadrature import DA, DB, DC, N_AVG, N_QUAD, A, B, C, point_averages
 
 
 @njit(cache=True, error_model="numpy")
@@ -52,19 +52,10 @@ def _fill_jacobian(J, avg, v, sigma0, sigma2):
 
 
 @njit(cache=True, error_model="numpy")
-def _kernel(v_ref, W, vd, p, sigma0, sigma2, rule, x, wx, side, J, F):
-    avg = np.empty(N_AVG)
-    pv = p.copy()   # the point's parameters: vd varies along the grid
-    for i in range(v_ref.size):
-        pv[P.VD] = vd[i]
-        phase_average(avg, v_ref[i], W[i], rule, x, wx, pv, side)
-        _fill_jacobian(J[i], avg, v_ref[i], sigma0, sigma2)
-        F[i] = force_and_slope(avg, v_ref[i], sigma2, LUGRE)[0]
-
-
-def _flat(*arrays):
-    b = np.broadcast_arrays(*[np.asarray(a, float) for a in arrays])
-    return b[0].shape, [np.ascontiguousarray(a).ravel() for a in b]
+def _jacobians(avg, v, sigma0, sigma2, J, F):
+    for i in range(v.size):
+        _fill_jacobian(J[i], avg[i], v[i], sigma0, sigma2)
+        F[i] = force_and_slope(avg[i], v[i], sigma2, LUGRE)[0]
 
 
 def jacobian(v_ref, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, side=1.0):
@@ -87,11 +78,10 @@ def jacobian(v_ref, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, s
     F_eff : s ndarray
         Effective friction ``<F>(v_ref)`` (Eq. 5.9), which is also ``e0``.
     """
-    shape, (v, w, d) = _flat(v_ref, W, p[P.VD] if vd is None else vd)
-    x, wx = gauss_legendre(n_quad)
+    shape, v, avg = point_averages(v_ref, W, p, dither=dither, vd=vd, n_quad=n_quad,
+                                   side=side)
     J, F = np.empty((v.size, 3, 3)), np.empty(v.size)
-    _kernel(v, w, d, np.array(p, dtype=np.float64), float(p[P.SIGMA0]), float(p[P.SIGMA2]),
-            rule_code(dither), x, wx, float(side), J, F)
+    _jacobians(avg, v, float(p[P.SIGMA0]), float(p[P.SIGMA2]), J, F)
     return J.reshape(shape + (3, 3)), F.reshape(shape)
 
 
@@ -118,14 +108,8 @@ def equilibrium(v_ref, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD
 
 def averages(v, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD, side=1.0):
     """Phase averages ``(A, B, C, S, A', B', C', S')`` at ``(v, W)``, shape ``(*s, 8)``."""
-    shape, (v, w, d) = _flat(v, W, p[P.VD] if vd is None else vd)
-    x, wx = gauss_legendre(n_quad)
-    pv, rule = np.array(p, dtype=np.float64), rule_code(dither)
-    out = np.empty((v.size, N_AVG))
-    for i in range(v.size):
-        pv[P.VD] = d[i]
-        phase_average(out[i], v[i], w[i], rule, x, wx, pv, float(side))
-    return out.reshape(shape + (N_AVG,))
+    shape, _, avg = point_averages(v, W, p, dither=dither, vd=vd, n_quad=n_quad, side=side)
+    return avg.reshape(shape + (N_AVG,))
 
 
 def averaged_rhs(x, v_ref, W, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD):
