@@ -60,6 +60,41 @@ def _use_engine_cache_dir() -> None:
 _use_engine_cache_dir()
 
 
+def _helpers_per_fastmath() -> None:
+    """Give every fastmath setting its own cache of numba's internal helpers.
+
+    numba compiles a helper such as float ``x ** 2`` once per process and keeps it in
+    ``BaseContext.cached_internal_func``, keyed without the fastmath flags; a fastmath
+    function's context is a shallow copy (``subtarget``) sharing that dict. So DP5's
+    ``attempt`` (``fastmath={'contract'}``) got ``err += (ei / sc) ** 2`` with or without a
+    fused multiply-add depending on whether a plain function using ``** 2`` had been
+    compiled first in the process -- which depends on what the disk cache held: a worker
+    that loaded the other kernels and compiled ``attempt`` differed from one that compiled
+    everything by up to 3e-13 relative in v_slow_p2p (found when a LocalCluster's and an
+    external cluster's cubes of one spec differed; tests/engine/test_compile_order.py).
+    numba internals (pinned to 0.68 in pyproject.toml); if they move, the test says so."""
+    from numba.core import base
+
+    original = base.BaseContext.subtarget
+    if getattr(original, "_ditherlab", False):
+        return
+
+    def subtarget(self, **kws):
+        obj = original(self, **kws)
+        if obj.cached_internal_func is self.cached_internal_func:
+            theirs = frozenset(getattr(obj.fastmath, "flags", None) or ())
+            if theirs != frozenset(getattr(self.fastmath, "flags", None) or ()):
+                by_flags = self.__dict__.setdefault("_ditherlab_helpers_by_fastmath", {})
+                obj.cached_internal_func = by_flags.setdefault(theirs, {})
+        return obj
+
+    subtarget._ditherlab = True
+    base.BaseContext.subtarget = subtarget
+
+
+_helpers_per_fastmath()
+
+
 _STABLE = (bool, int, float, complex, str, bytes, type(None))
 
 
