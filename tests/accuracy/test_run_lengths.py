@@ -8,6 +8,11 @@ split near a grazing exit: (W 2.4, omega 631) moves ``long_stick_fraction`` by 1
 promised before these outputs got their own promises (measured: the cube said ``ok`` and
 its 12-point error sample did not see it).
 
+Whether a run splits there depends on the last bits of the trajectory: the two points were
+found with DP5's error norm compiled without its fused multiply-add (numba's compile-order
+dependence, fixed in engine/jit.py); with the now deterministic build the standard level is
+1e-8 off at both, so the test checks the promises, not that a split happens.
+
 Reference: DP5 at rtol 1e-12 (atol 1e-15), confirmed by an independent fixed-step RK4 run
 (256 steps per dither period, no error control) to 1e-6 absolute / relative (measured
 1.4e-8 and 1.4e-7 at the two points).
@@ -19,7 +24,7 @@ from engine import params as P
 from engine import status as S
 from engine.batch import run_block
 from engine.settings import Settings
-from sweeps.accuracy import TARGET_ERROR, promise
+from sweeps.accuracy import promise
 from sweeps.plan import make_plan
 from sweeps.spec import parse_spec
 from sweeps.spec_models import LEVELS
@@ -66,8 +71,5 @@ def test_run_outputs_keep_their_promise(reference, level):
     errs = _errors(out, reference, float(plan.params[P.LONG_STICK]))
     for name, err in errs.items():
         assert err.max() <= promise(level, name), (level, name, err)
-    if level == "standard":   # the defect: the split moved them beyond the level's target
-        assert errs["long_stick_fraction"][0] > TARGET_ERROR[level]
-        assert errs["max_stick"][1] > TARGET_ERROR[level]
     # the zone map's class (long_stick_fraction > 0) does not depend on the split
     assert ((out["long_stick_fraction"] > 0) == (reference["long_stick_fraction"] > 0)).all()
