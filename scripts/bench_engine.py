@@ -310,7 +310,7 @@ def c_cheapest(anchor: Anchor, W: float, q_ref, acc: float) -> dict:
 
 def speed_row(scene, acc, m, hit, t, ratio=None, ratio_same=None, vs_best=None):
     _, steps, evals, _ = hit[1]
-    kind = "rk4" if m.split()[0] == "rk4" else "adaptive"   # "rk4", "rk4 nokink"
+    kind = "rk4" if "rk4" in m.split() else "adaptive"   # "rk4", "rk4 nokink", "C rk4"
     return {"scene": scene, "acc": acc, "method": m, "setting": fmt_setting(kind, hit[0]),
             "error": hit[2], "t": t, "steps": steps, "evals": evals, "ns": 1e9 * t / evals,
             "ratio": ratio, "ratio_same": ratio_same, "vs_best": vs_best}
