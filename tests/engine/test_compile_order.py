@@ -20,23 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-SPEC = """
-name = "e2e-sim"
-friction = "lugre"
-dither = "square-velocity"
-method = "simulate"
-outputs = ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"]
-accuracy = "draft"
-block_size = 2
-[time]
-t_end = 12.0
-t_transient = 4.0
-[grid]
-W = [0.0, 0.2, 0.4, 0.6]
-omega = [300.0, 1000.0]
-v_ref = [0.4]
-v_d = [0.1]
-"""
+from ..sweeps.conftest import SIMULATE_SPEC as SPEC   # 8 points, LuGre, square dither, draft
 
 BLOCKS = """
 import sys, numpy as np
