@@ -28,8 +28,7 @@ import store
 from engine import status as S
 from store.catalogue_db import FINAL
 
-from . import history
-from . import task
+from . import history, task
 from .cluster import EarlyStart
 from .cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
@@ -96,10 +95,12 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     if lease is None:
         return attached_result(plan, sweep, attached, t0)
     sink, timings = None, {}
-    # a local cluster starts (and compiles the kernel) while the cube is prepared below
+    # a local cluster starts (and compiles the kernel) while the cube is prepared below;
+    # not for a run that only republishes its cube
+    local = plan.path == "simulate" and client is None and scheduler is None
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
-        if plan.path == "simulate" and client is None and scheduler is None else None
+        if local and (todo or needs_estimate(plan, sweep, cube)) else None
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
