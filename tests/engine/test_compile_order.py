@@ -1,6 +1,5 @@
-"""A kernel's machine code, hence its bits, must not depend on what its process compiled before it
-or loaded from the
-disk cache.
+"""A kernel's machine code, hence its bits, must not depend on what its process compiled
+before it or loaded from the disk cache.
 
 numba compiles helpers such as float ``x ** 2`` once per process and keeps them in
 ``BaseContext.cached_internal_func``, keyed without the fastmath flags. DP5's ``attempt``
