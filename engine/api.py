@@ -69,6 +69,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
         raise ValueError(f"scene.path: simulate() integrates in time; {scene.path!r} is "
                          "an analysis path, use engine.batch.run_block")
     p = P.pack(**p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
+    scene.check_params(p)
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")
     if record_dt is not None and not record_dt > 0.0:

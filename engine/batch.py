@@ -41,6 +41,7 @@ def _check(scene: Scene, points: np.ndarray, p: np.ndarray) -> None:
     if p.shape != (P.N_PARAMS,):
         raise ValueError(f"p: expected the parameter vector of shape ({P.N_PARAMS},) from "
                          f"engine.params.pack, got {p.shape}")
+    scene.check_params(p)
 
 
 def run_block(scene: Scene, points, p, settings: Settings | None = None) -> BlockResult:

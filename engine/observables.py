@@ -130,7 +130,7 @@ def make_observer(scene, system) -> Observer:
     period_stops = p2p and not undithered
     elasto = scene.friction == "elastoplastic"
     hooks = _make_hooks(system, phases, hist, p2p and undithered, period_stops, elasto,
-                        scene.friction == "lugre", make_g(scene.stribeck))
+                        scene.friction == "lugre", make_g(scene.stribeck, scene.delta))
     finish = _make_finish(system, names, hist)
     needs_mid = phases or (p2p and undithered)
     return Observer(O_SIZE, names, hist, needs_mid, period_stops, *hooks, finish)

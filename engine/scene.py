@@ -14,6 +14,11 @@ from .friction import LAWS
 SYSTEMS = ("slider", "contact")
 PATHS = ("simulate", "averaged", "hbm")   # how a point is answered (a spec's ``method``)
 ANALYSIS_PATHS = ("averaged", "hbm")      # no time integration
+FOLDED_EXPONENTS = (1.0, 2.0)             # Stribeck exponents with a pow-free kernel
+
+
+def _folded(value) -> float | None:
+    return float(value) if value in FOLDED_EXPONENTS else None
 
 
 @dataclass(frozen=True)
@@ -24,6 +29,9 @@ class Scene:
     ``path`` -- ``"simulate"`` (time integration), ``"averaged"`` or ``"hbm"`` (engine.analysis);
     a sweep spec calls it ``method``. ``integrator`` -- a name of
     :data:`engine.integrators.METHODS`; off the simulate path it is cleared to ``""``.
+    ``delta``, ``delta_d`` -- the exponents of Eqs. 2.4 and 2.5 folded into the simulate
+    kernels when they are 1 or 2 (no run-time test per evaluation); None reads them from
+    ``p``. A parameter vector must then carry the same values (:meth:`check_params`).
     """
 
     system: str = "slider"
@@ -36,6 +44,8 @@ class Scene:
     viscous: bool = True
     slow_force: bool = True
     outputs: tuple[str, ...] = ()
+    delta: float | None = None
+    delta_d: float | None = None
 
     def __post_init__(self):
         if self.system not in SYSTEMS:
@@ -46,8 +56,24 @@ class Scene:
             raise ValueError(f"dither must be one of {DITHER_KINDS}, got {self.dither!r}")
         if self.path not in PATHS:
             raise ValueError(f"path must be one of {PATHS}, got {self.path!r}")
-        if self.path != "simulate" and self.integrator:
-            object.__setattr__(self, "integrator", "")   # one Scene per analysis problem
+        for name in ("delta", "delta_d"):
+            if getattr(self, name) not in FOLDED_EXPONENTS + (None,):
+                raise ValueError(f"{name} must be one of {FOLDED_EXPONENTS} or None (read "
+                                 f"from p at run time), got {getattr(self, name)!r}")
+        if self.path != "simulate":
+            # one Scene per analysis problem; the analysis kernels read the exponents from p
+            object.__setattr__(self, "integrator", "")
+            object.__setattr__(self, "delta", None)
+            object.__setattr__(self, "delta_d", None)
+
+    def check_params(self, p) -> None:
+        """ValueError when ``p`` contradicts an exponent folded into the kernels."""
+        for name, index in (("delta", P.DELTA), ("delta_d", P.DELTA_D)):
+            fixed = getattr(self, name)
+            if fixed is not None and p[index] != fixed:
+                raise ValueError(f"p[{name}] = {p[index]!r} but the scene's kernels were "
+                                 f"compiled for {name} = {fixed!r}; build the scene with "
+                                 f"Scene.from_params(p, ...) or {name}=None")
 
     @classmethod
     def from_params(cls, p, *, system="slider", friction="lugre", dither="square-velocity",
@@ -64,6 +90,7 @@ class Scene:
             viscous=bool(p[P.SIGMA2] != 0.0),
             slow_force=bool(p[P.SLOW_A] != 0.0 and system == "slider"),
             outputs=tuple(outputs),
+            delta=_folded(p[P.DELTA]), delta_d=_folded(p[P.DELTA_D]),
         )
 
     def with_(self, **changes) -> Scene:

@@ -17,9 +17,10 @@
 
 Effect flags of the Scene fold at compile time: ``stribeck=False`` uses ``g = fc``
 without an exp, ``bristle_damping=False`` drops ``sigma1(u)``, ``viscous=False``
-drops ``sigma2 u``. The pieces (g, sigma1, the bristle rate, alpha, the force) are the
-functions of :mod:`.stribeck`, :mod:`.lugre` and :mod:`.elastoplastic`, which the averaged
-and harmonic-balance paths call too.
+drops ``sigma2 u``; ``Scene.delta`` / ``delta_d`` fold the Stribeck exponents. The pieces
+(g, sigma1, the bristle rate, alpha, the force) are the functions of :mod:`.stribeck`,
+:mod:`.lugre` and :mod:`.elastoplastic`, which the averaged and harmonic-balance paths call
+too.
 """
 from __future__ import annotations
 
@@ -41,8 +42,8 @@ def make_law(scene):
 
 
 def _bristle_law(scene):
-    g = make_g(scene.stribeck)
-    sigma1 = make_sigma1(scene.bristle_damping)
+    g = make_g(scene.stribeck, scene.delta)
+    sigma1 = make_sigma1(scene.bristle_damping, scene.delta_d)
     force = make_force(scene.bristle_damping, scene.viscous)
     elasto = scene.friction == "elastoplastic"
 
@@ -62,7 +63,7 @@ def _bristle_law(scene):
 
 def _static_law(scene):
     stribeck = scene.friction == "stribeck" and scene.stribeck
-    g = make_g(stribeck)
+    g = make_g(stribeck, scene.delta)
     viscous = scene.viscous
 
     @njit(inline="always", error_model="numpy")
@@ -92,7 +93,7 @@ def make_kinks(scene):
             out[0] = u
         return 1, kinks
     if scene.friction == "elastoplastic":
-        gfun = make_g(scene.stribeck)
+        gfun = make_g(scene.stribeck, scene.delta)
 
         @njit(inline="always", error_model="numpy")
         def kinks(u, z, hold, p, out):
