@@ -4,7 +4,8 @@ The folded kernel compiles only the branch of ``stribeck.decay`` that ``p`` woul
 time: the same expression, so RK4 (strict IEEE) gives the run-time kernel's numbers bit for
 bit. DP5 compiles its stage sums with contraction (FMA, engine.integrators.dopri5); the
 smaller folded right-hand side is inlined into them differently, which moves last bits
-(measured on specs/fig14.toml: at most 6.5e-8 in F_mean, 3.5e-7 in alpha_hist). A parameter
+(measured with scripts/bit_identical.py --quick on specs/fig14.toml thinned to 10x10:
+at most 6.5e-8 in F_mean, 3.5e-7 in alpha_hist). A parameter
 vector that contradicts a folded exponent is refused, never integrated with the wrong law.
 """
 import numpy as np
