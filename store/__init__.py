@@ -42,14 +42,15 @@ Public API
 ----------
 cube / points / cube_io
     ``AXES``; ``empty_cube(coords, variables, attrs=None, axis_units=None,
-    axis_long_names=None) -> Dataset``; ``output_names(ds)``; ``fill(ds, flat_index,
+    axis_long_names=None) -> Cube`` (``store.cubedata``: numpy arrays, dims, attributes;
+    ``.to_dataset()`` for xarray); ``output_names(ds)``; ``fill(ds, flat_index,
     values, status, cost_s, steps, evals)``; ``grid_points(ds, flat_index=None) -> (n, 4)``;
     ``pending_index(ds)``; ``status_counts(ds)``; ``publish(ds, path) -> Path``;
-    ``open_cube(path) -> Dataset``; status codes ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
+    ``open_cube(path) -> xarray.Dataset``; ``read_cube(path) -> Cube``; status codes ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
 journal
     ``Journal(folder)`` with ``.write(block_id, payload)``, ``.done() -> set[int]``,
     ``.read() -> Iterator[(block_id, payload)]``; ``block_payload(...)``;
-    ``fill_block(ds, payload)``; ``rebuild(ds_empty, journal) -> Dataset``.
+    ``fill_block(ds, payload)``; ``rebuild(ds_empty, journal) -> Cube``.
 catalogue
     ``Catalogue(store_root)`` with ``register``, ``update``, ``get``, ``find``,
     ``list``, ``scan``; ``STATES``.
@@ -69,13 +70,15 @@ import lazy_loader as _lazy
 # xarray or matplotlib (a command's start-up time is its imports).
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "errors",
+    submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "cubedata",
+                "errors",
                 "header", "journal", "layout", "lease", "maps", "points", "query", "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
         "cube": ["AXES", "empty_cube", "output_names"],
-        "cube_io": ["open_cube", "publish"],
+        "cube_io": ["open_cube", "publish", "read_cube"],
+        "cubedata": ["Cube", "as_dataset"],
         "header": ["read_header"],
         "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
         "atomic": ["atomic_write"],

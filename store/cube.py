@@ -1,6 +1,7 @@
 """The result cube of a sweep (DESIGN.md §4): build it, fill it, publish it, open it.
 
-A cube is an ``xarray.Dataset`` with dims and coordinates exactly ``AXES`` =
+A cube is a :class:`store.cubedata.Cube` (the netCDF data model in numpy; readers get an
+``xarray.Dataset`` from ``store.open_cube``) with dims and coordinates exactly ``AXES`` =
 ``("W", "omega", "v_ref", "v_d")`` (length 1 where an axis is not swept) and:
 
 - one float64 variable per requested output (NaN until computed);
@@ -28,9 +29,9 @@ from collections.abc import Mapping
 from datetime import datetime, timezone
 
 import numpy as np
-import xarray as xr
 
 from . import attrs as A
+from .cubedata import Cube, Variable
 from .status import FAILED, NON_FINITE, NOT_COMPUTED, OK, STATUS_MEANINGS  # noqa: F401
 
 AXES = ("W", "omega", "v_ref", "v_d")
@@ -69,7 +70,7 @@ def _check_axis(name: str, values) -> np.ndarray:
     return arr
 
 
-def _axis_coords(coords, axis_units, axis_long_names) -> dict[str, xr.Variable]:
+def _axis_coords(coords, axis_units, axis_long_names) -> dict[str, Variable]:
     unknown = set(coords) - set(AXES)
     missing = [a for a in AXES if a not in coords]
     if unknown or missing:
@@ -84,11 +85,11 @@ def _axis_coords(coords, axis_units, axis_long_names) -> dict[str, xr.Variable]:
     for a in AXES:
         long_name = (axis_long_names or {}).get(a, AXIS_META[a][0])
         units = (axis_units or {}).get(a, AXIS_META[a][1])
-        out[a] = xr.Variable(a, _check_axis(a, coords[a]), {"long_name": long_name, "units": units})
+        out[a] = Variable(a, _check_axis(a, coords[a]), {"long_name": long_name, "units": units})
     return out
 
 
-def _bookkeeping(shape: tuple[int, ...]) -> dict[str, xr.Variable]:
+def _bookkeeping(shape: tuple[int, ...]) -> dict[str, Variable]:
     out = {}
     for name, (dtype, initial, long_name, units) in BOOKKEEPING.items():
         attrs = {"long_name": long_name}
@@ -97,7 +98,7 @@ def _bookkeeping(shape: tuple[int, ...]) -> dict[str, xr.Variable]:
             attrs["flag_meanings"] = " ".join(STATUS_MEANINGS)
         else:
             attrs["units"] = units
-        out[name] = xr.Variable(AXES, np.full(shape, initial, dtype=dtype), attrs)
+        out[name] = Variable(AXES, np.full(shape, initial, dtype=dtype), attrs)
     return out
 
 
@@ -120,7 +121,7 @@ def empty_cube(
     attrs: Mapping | None = None,
     axis_units: Mapping[str, str] | None = None,
     axis_long_names: Mapping[str, str] | None = None,
-) -> xr.Dataset:
+) -> Cube:
     """A cube with every point not yet computed: outputs NaN, status 1, costs 0.
 
     Parameters
@@ -143,8 +144,9 @@ def empty_cube(
 
     Returns
     -------
-    xarray.Dataset
-        In memory, dims ``AXES``; fill it with ``fill`` and write it with ``publish``.
+    Cube
+        In memory, dims ``AXES``; fill it with ``fill`` and write it with ``publish``
+        (``.to_dataset()`` for an ``xarray.Dataset``).
     """
     axes = _axis_coords(coords, axis_units, axis_long_names)
     shape = tuple(axes[a].size for a in AXES)
@@ -167,37 +169,37 @@ def empty_cube(
             dim, size = meta[2]
             dims, full = AXES + (dim,), shape + (int(size),)
             axes[dim] = _bin_coord(dim, int(size))
-        data[name] = xr.Variable(
+        data[name] = Variable(
             dims, np.full(full, np.nan), {"long_name": meta[0], "units": meta[1]}
         )
     data.update(_bookkeeping(shape))
-    return xr.Dataset(data, coords=axes, attrs=_global_attrs(attrs))
+    return Cube(axes, data, _global_attrs(attrs))
 
 
-def _bin_coord(dim: str, size: int) -> xr.Variable:
+def _bin_coord(dim: str, size: int) -> Variable:
     """Centres of ``size`` equal bins of [0, 1], with their CF cell bounds described."""
     centres = (np.arange(size) + 0.5) / size
-    return xr.Variable(dim, centres, {
+    return Variable(dim, centres, {
         "long_name": f"centre of the {dim} (equal bins of [0, 1])", "units": "1",
         "comment": f"bin k covers [k/{size}, (k+1)/{size}); the last bin includes 1",
     })
 
 
-def output_names(ds: xr.Dataset) -> list[str]:
+def output_names(ds: Cube) -> list[str]:
     """The cube's output variables (every data variable except the bookkeeping ones and
     a refined sweep's ``provenance``)."""
     return [str(v) for v in ds.data_vars if v not in BOOKKEEPING and v != PROVENANCE]
 
 
-def add_provenance(ds: xr.Dataset) -> None:
+def add_provenance(ds: Cube) -> None:
     """Give ``ds`` the ``provenance`` flag variable of a refined sweep (int8, CF flags: 0
     computed, 1 inferred, 2 not yet decided), every point not yet decided."""
-    ds[PROVENANCE] = xr.Variable(AXES, np.full(shape_of(ds), 2, dtype=np.int8), {
+    ds[PROVENANCE] = Variable(AXES, np.full(shape_of(ds), 2, dtype=np.int8), {
         "long_name": "computed, or inferred from computed neighbours (adaptive refinement)",
         "flag_values": np.arange(len(PROVENANCE_MEANINGS), dtype=np.int8),
         "flag_meanings": " ".join(PROVENANCE_MEANINGS)})
 
 
-def shape_of(ds: xr.Dataset) -> tuple[int, ...]:
+def shape_of(ds: Cube) -> tuple[int, ...]:
     """Grid shape in ``AXES`` order."""
     return tuple(int(ds.sizes[a]) for a in AXES)

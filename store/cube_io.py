@@ -1,27 +1,34 @@
-"""A cube as a file: :func:`publish` (atomic: the image made in memory, free space
-checked, temporary file, fsync, rename), :func:`open_cube` (fully into memory, a
-:class:`CubeError` that says how to repair an unreadable file), :func:`disagreement`
-between a published cube and one in memory, and :func:`cube_bytes` for space checks."""
+"""A cube as a file: :func:`publish` (atomic: the image made in memory with h5netcdf, free
+space checked, temporary file, fsync, rename), :func:`open_cube` (an ``xarray.Dataset``
+fully in memory, a :class:`CubeError` that says how to repair an unreadable file),
+:func:`read_cube` (the same file as a :class:`store.cubedata.Cube`, without xarray),
+:func:`disagreement` between a published cube and one in memory, and :func:`cube_bytes`
+for space checks.
+
+The writer and :func:`read_cube` use h5netcdf directly: the file is what xarray's
+``to_netcdf(engine="h5netcdf")`` wrote before (tests/test_cf.py checks it against CF-1.8):
+float variables and coordinates carry ``_FillValue = NaN``, integer ones none (with a
+fill value xarray would decode int8 flags as float, pydata/xarray#1576), data variables
+zlib level 4 with shuffle."""
 
 from __future__ import annotations
 
-import sys
-from contextlib import nullcontext
+import io
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from . import attrs as A
 from .atomic import atomic_write, remove_stale_temps
 from .cube import AXES
+from .cubedata import Cube, Variable
 from .errors import StoreError
 from .layout import SPEC_NAME
 
-COMPRESSION = {"zlib": True, "complevel": 4, "shuffle": True}
+COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True}
 
 
-def _check_layout(ds: xr.Dataset, where: str) -> None:
+def _check_layout(ds, where: str) -> None:
     if not set(AXES) <= set(ds.dims) or "status" not in ds \
             or any(a not in ds.coords for a in AXES):
         raise ValueError(
@@ -34,19 +41,9 @@ def _check_layout(ds: xr.Dataset, where: str) -> None:
                              "(and at most one extra trailing dimension)")
 
 
-def _encoding(ds: xr.Dataset) -> dict[str, dict]:
-    enc = {}
-    for name, var in ds.data_vars.items():
-        enc[name] = dict(COMPRESSION)
-        if np.issubdtype(var.dtype, np.integer):
-            enc[name]["_FillValue"] = (
-                None  # with a fill value xarray decodes int8 as float (pydata/xarray#1576)
-            )
-    return enc
-
-
-def publish(ds: xr.Dataset, path) -> Path:
-    """Write ``ds`` to ``path`` atomically (temporary file, fsync, rename, fsync folder).
+def publish(ds, path) -> Path:
+    """Write the cube ``ds`` (a :class:`Cube`, or an ``xarray.Dataset``) to ``path``
+    atomically (temporary file, fsync, rename, fsync folder).
 
     A reader of ``path`` sees the previous file or the new one, never a torn file; a
     writer killed before the rename leaves the old file intact. The netCDF image is
@@ -57,28 +54,31 @@ def publish(ds: xr.Dataset, path) -> Path:
     dead writers in the same folder are removed first. Returns ``path``.
     """
     path = Path(path)
-    _check_layout(ds, f"publish({path})")
-    out = ds.copy(deep=False)
-    for var in out.variables.values():
-        var.encoding = {}  # drop encodings read from an earlier file (source, chunks)
+    cube = ds if isinstance(ds, Cube) else Cube.from_dataset(ds)
+    _check_layout(cube, f"publish({path})")
     if path.parent.exists():
         remove_stale_temps(path.parent)
-    with _local_writes():
-        image = out.to_netcdf(engine="h5netcdf", encoding=_encoding(out))
-    return atomic_write(path, image)
+    return atomic_write(path, netcdf_image(cube))
 
 
-def _local_writes():
-    """xarray takes a dask.distributed lock for every netCDF write while a distributed
-    ``Client`` is dask's default scheduler (a user's ``Client(cluster)`` is), and for an
-    in-memory image that lock fails ("Semaphore or Lock ... not known"). A cube is
-    numpy-backed, so dask's synchronous scheduler is right. ``store`` never imports dask:
-    this only configures it when something else already has."""
-    dask = sys.modules.get("dask")
-    return dask.config.set(scheduler="synchronous") if dask is not None else nullcontext()
+def netcdf_image(cube: Cube) -> bytes:
+    """The netCDF-4 file of ``cube``, made in memory (module docstring: the layout)."""
+    import h5netcdf
+
+    buf = io.BytesIO()
+    with h5netcdf.File(buf, "w") as f:
+        f.attrs.update(A.encode(cube.attrs))
+        for name, var in cube.coords.items():
+            f.dimensions[name] = var.size
+        for name, var in cube.variables.items():
+            options = {} if name in cube.coords else COMPRESSION
+            fill = np.nan if var.dtype.kind == "f" else None
+            out = f.create_variable(name, var.dims, data=var.data, fillvalue=fill, **options)
+            out.attrs.update({k: v for k, v in var.attrs.items() if k != "_FillValue"})
+    return buf.getvalue()
 
 
-def cube_bytes(ds: xr.Dataset) -> int:
+def cube_bytes(ds) -> int:
     """A generous size of ``ds`` as a published file: its values uncompressed plus
     HDF5's metadata (for free-space checks before a run)."""
     return int(sum(v.nbytes for v in ds.variables.values())) + 64 * 1024 + 2048 * len(ds.variables)
@@ -88,9 +88,9 @@ class CubeError(StoreError, ValueError):
     """A cube file that cannot be read; the message says how to repair it."""
 
 
-def open_cube(path) -> xr.Dataset:
-    """Read a cube fully into memory and close the file (read-only; works on a read-only
-    store).
+def open_cube(path):
+    """Read a cube fully into memory as an ``xarray.Dataset`` and close the file
+    (read-only; works on a read-only store).
 
     Raises
     ------
@@ -101,35 +101,68 @@ def open_cube(path) -> xr.Dataset:
         than ``AXES``, no ``status``); the message names the command that republishes
         it from the sweep's journal.
     """
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no cube at {path}; has the sweep been published yet?")
+    import xarray as xr
+
+    path = _existing(path)
     try:
         with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
             ds = f.load()
         _check_layout(ds, f"open_cube({path})")
-    except (OSError, KeyError, ValueError, RuntimeError) as err:  # h5py: a torn file raises
-        spec = path.parent / SPEC_NAME
-        how = (f" (ditherlab submit {spec} --store {path.parent.parent})"
-               if spec.exists() else "")
-        text = f"{type(err).__name__}: {err}".replace("\n", " ")
-        raise CubeError(
-            f"the cube at {path} is unreadable ({text[:160]}); submit the spec again{how} "
-            "to republish it from the journal"
-        ) from err
+    except _READ_ERRORS as err:
+        raise _unreadable(path, err) from err
     return ds
 
 
-def disagreement(path, ds: xr.Dataset) -> str | None:
+def read_cube(path) -> Cube:
+    """The cube at ``path`` as written (:class:`Cube`, h5netcdf alone, no decoding but
+    the fill value dropped from the attributes); errors as :func:`open_cube`."""
+    import h5netcdf
+
+    path = _existing(path)
+    try:
+        with h5netcdf.File(path, "r") as f:
+            def var(v) -> Variable:
+                return Variable(v.dimensions, v[...],
+                                {k: x for k, x in v.attrs.items() if k != "_FillValue"})
+
+            coords = {d: var(f.variables[d]) for d in f.dimensions}
+            cube = Cube(coords, {k: var(v) for k, v in f.variables.items() if k not in coords},
+                        dict(f.attrs))
+        _check_layout(cube, f"read_cube({path})")
+    except _READ_ERRORS as err:
+        raise _unreadable(path, err) from err
+    return cube
+
+
+_READ_ERRORS = (OSError, KeyError, ValueError, RuntimeError)   # h5py: a torn file raises
+
+
+def _existing(path) -> Path:
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"no cube at {path}; has the sweep been published yet?")
+    return path
+
+
+def _unreadable(path: Path, err: Exception) -> CubeError:
+    spec = path.parent / SPEC_NAME
+    how = f" (ditherlab submit {spec} --store {path.parent.parent})" if spec.exists() else ""
+    text = f"{type(err).__name__}: {err}".replace("\n", " ")
+    return CubeError(f"the cube at {path} is unreadable ({text[:160]}); submit the spec "
+                     f"again{how} to republish it from the journal")
+
+
+def disagreement(path, ds) -> str | None:
     """``None`` if the published cube at ``path`` holds exactly ``ds`` (every variable
     and coordinate, and ``ds``'s attributes but ``created``; attributes only the file has
     are kept), else why not, in a few words."""
     try:
-        pub = open_cube(path)
+        pub = read_cube(path)
     except FileNotFoundError:
         return "the cube is missing"
     except CubeError as err:
         return f"the cube is unreadable ({err.__cause__})"
+    ds = ds if isinstance(ds, Cube) else Cube.from_dataset(ds)
     if set(pub.variables) != set(ds.variables):
         return "the cube has other variables than the journal's"
     for name, var in ds.variables.items():

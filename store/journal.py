@@ -46,7 +46,6 @@ from contextlib import suppress
 from pathlib import Path
 
 import numpy as np
-import xarray as xr
 
 from .atomic import atomic_write, remove_stale_temps
 from .points import fill
@@ -254,7 +253,7 @@ def _warn(message: str) -> None:
     warnings.warn(message, JournalWarning, stacklevel=3)
 
 
-def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
+def fill_block(ds, payload: Mapping[str, np.ndarray]) -> None:
     """``store.points.fill`` from a journal payload."""
     values = {k: v for k, v in payload.items() if k not in FIELDS}
     fill(
@@ -268,8 +267,8 @@ def fill_block(ds: xr.Dataset, payload: Mapping[str, np.ndarray]) -> None:
     )
 
 
-def rebuild(ds_empty: xr.Dataset, journal: Journal, blocks: Sequence[np.ndarray] | None = None,
-            repair: bool = True) -> xr.Dataset:
+def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = None,
+            repair: bool = True):
     """A new cube: a deep copy of ``ds_empty`` with every verified journal block filled in.
 
     A block that does not fit the cube (outputs, shapes, index range, status codes;

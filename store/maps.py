@@ -28,6 +28,7 @@ from matplotlib.patches import Patch
 
 from . import attrs as A
 from .axes import axis_label, cell_edges, figure_format, is_log_spaced
+from .cubedata import as_dataset
 from .layout import atomic_write
 from .query import (
     NO_DATA,
@@ -150,6 +151,7 @@ def stability_map(ds: xr.Dataset, path, sel=None, title: str | None = None) -> P
 
     ``sel`` fixes the axes other than v_ref and W (e.g. ``{"v_d": 0.1}``).
     """
+    ds = as_dataset(ds)
     chart = stability_chart(ds, sel)
     fig, ax = _figure()
     present = set(np.unique(chart.values).tolist())
@@ -189,6 +191,7 @@ def stick_slip_map(
     threshold: float = 0.0,
 ) -> Path:
     """Fig. 14-style map of the long-duration stick-slip zone over (omega, W), to ``path``."""
+    ds = as_dataset(ds)
     zone = zone_map(ds, var, threshold, sel)
     fig, ax = _figure()
     _shade(ax, zone, ZONE_COLOURS, x="omega", y="W")
@@ -219,6 +222,7 @@ def friction_curves(
     ds: xr.Dataset, path, sel=None, title: str | None = None, var: str | None = None
 ) -> Path:
     """Effective friction against v_ref, one line per W (Figs. 5, 13), to ``path``."""
+    ds = as_dataset(ds)
     curves = effective_friction_curve(ds, sel, var).sortby("W").sortby("v_ref")
     fig, ax = _figure()
     norm = Normalize(float(curves.W.min()), float(curves.W.max()) + (curves.sizes["W"] == 1))

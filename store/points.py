@@ -7,13 +7,12 @@ from __future__ import annotations
 from collections.abc import Mapping
 
 import numpy as np
-import xarray as xr
 
 from .cube import AXES, output_names, shape_of
 from .status import OK, STATUS_MEANINGS
 
 
-def check_index(ds: xr.Dataset, flat_index) -> np.ndarray:
+def check_index(ds, flat_index) -> np.ndarray:
     """``flat_index`` as a 1-D int64 array, after checking it addresses points of ``ds``."""
     idx = np.asarray(flat_index)
     size = int(np.prod(shape_of(ds)))
@@ -29,7 +28,7 @@ def check_index(ds: xr.Dataset, flat_index) -> np.ndarray:
     return idx.astype(np.int64)
 
 
-def grid_points(ds: xr.Dataset, flat_index=None) -> np.ndarray:
+def grid_points(ds, flat_index=None) -> np.ndarray:
     """Parameter rows ``(n, 4)`` float64 of the points ``flat_index`` (all by default).
 
     Columns follow ``AXES`` (the engine's ``POINT_AXES`` order: W, omega, v_ref, vd).
@@ -40,12 +39,12 @@ def grid_points(ds: xr.Dataset, flat_index=None) -> np.ndarray:
     return np.column_stack([ds[a].values[m] for a, m in zip(AXES, multi)]).astype(np.float64)
 
 
-def pending_index(ds: xr.Dataset) -> np.ndarray:
+def pending_index(ds) -> np.ndarray:
     """Flat indices of the points whose status is not ok (to resume a sweep)."""
     return np.flatnonzero(ds["status"].values.reshape(-1) != OK)
 
 
-def status_counts(ds: xr.Dataset) -> dict[str, int]:
+def status_counts(ds) -> dict[str, int]:
     """Number of points per status meaning, e.g. ``{"ok": 90, "not_yet_computed": 10, ...}``."""
     counts = np.bincount(
         ds["status"].values.reshape(-1).astype(np.int64), minlength=len(STATUS_MEANINGS)
@@ -76,14 +75,14 @@ def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarra
 
 
 def fill(
-    ds: xr.Dataset, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
+    ds, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
 ) -> None:
     """Write the results of some points into ``ds`` in place.
 
     Parameters
     ----------
     ds
-        A cube from ``empty_cube`` or ``open_cube`` (in memory).
+        A cube from ``empty_cube`` or ``rebuild`` (a ``store.cubedata.Cube``, in memory).
     flat_index
         ``(n,)`` int, C-order flat indices over ``AXES``.
     values
@@ -97,7 +96,6 @@ def fill(
     idx = check_index(ds, flat_index)
     columns = _columns(ds, idx.size, values, status, cost_s, steps, evals)
     for name, col in columns.items():
-        var = ds.variables[name]
-        var.load()  # numpy-backed from here on, so writes go into the dataset itself
+        var = ds[name]
         flat = var.data.reshape((-1,) + var.shape[len(AXES):])   # a view: points first
         flat[idx] = col

@@ -1,6 +1,7 @@
 """Questions asked of a cube: zone maps, stability charts, friction curves, tables.
 
-Every function takes a cube (``xarray.Dataset`` with dims ``AXES``) and an optional
+Every function takes a cube (``xarray.Dataset`` with dims ``AXES``, or a
+``store.cubedata.Cube``) and an optional
 ``sel``: a dict ``axis -> value`` picking the nearest grid value of that axis
 (``{"v_d": 0.1}``; strings such as ``"0.1"`` from a command line are accepted).
 A value beyond either end of the grid by more than half the end step (a relative
@@ -23,6 +24,7 @@ import xarray as xr
 from scipy import ndimage
 
 from .cube import AXES, OK, PROVENANCE, output_names
+from .cubedata import as_dataset
 
 NO_DATA, STABLE, PU, SU = -1, 0, 1, 2
 STABILITY_MEANINGS = "no_data stable primary_unstable secondary_unstable"
@@ -58,7 +60,7 @@ def _show(values: np.ndarray, limit: int = 12) -> str:
 def select(ds: xr.Dataset, sel: Mapping[str, object] | None = None) -> xr.Dataset:
     """``ds`` with each axis of ``sel`` fixed at its nearest grid value (kept as a
     length-1 axis, so the result is still a cube)."""
-    sel = dict(sel or {})
+    ds, sel = as_dataset(ds), dict(sel or {})
     unknown = sorted(set(sel) - set(AXES))
     if unknown:
         raise ValueError(f"sel: unknown axis {unknown}; axes are {AXES}")
@@ -79,6 +81,7 @@ def plane(
     Every other axis must have one value after ``sel``; otherwise a ``ValueError``
     names the axis, its values and how to choose one.
     """
+    ds = as_dataset(ds)
     _variable(ds, var, what)
     sub = select(ds, sel)
     for axis in AXES:
@@ -272,6 +275,7 @@ def table(ds: xr.Dataset, var: str | None = None, sel=None) -> pd.DataFrame:
     with an extra dimension such as ``alpha_hist`` comes only when asked for, one row per
     point and bin, with the bin coordinate as a column). Rows come in the cube's C order.
     """
+    ds = as_dataset(ds)
     if var is None:
         names = [n for n in output_names(ds) if ds[n].dims == AXES]
     else:

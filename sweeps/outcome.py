@@ -87,7 +87,7 @@ def attached_result(plan, sweep, row, t0) -> SubmitResult:
     n_failed, n_ok = row["failed_points"], row["done_points"] - row["failed_points"]
     if sweep.cube.exists():
         try:
-            counts = point_counts(store.open_cube(sweep.cube))
+            counts = point_counts(store.read_cube(sweep.cube))
             n_failed = counts["failed_points"]
             n_ok = counts["done_points"] - n_failed
         except Exception as err:  # noqa: BLE001 -- the row's counts will do

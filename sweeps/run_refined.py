@@ -72,15 +72,14 @@ def infer(plan: Plan, cube) -> None:
     asked = plan.refinement.asked
     plan.sources = src
     for name in store.cube.output_names(cube):
-        var = cube.variables[name]
-        var.load()
+        var = cube[name]
         flat = var.data.reshape((asked.size,) + var.shape[4:])
         flat[~asked] = flat[src[~asked]]
-    status = cube.variables["status"].data.reshape(-1)
+    status = cube["status"].data.reshape(-1)
     status[~asked] = status[src[~asked]]
     for name in ("cost_s", "steps", "evals"):
-        cube.variables[name].data.reshape(-1)[~asked] = 0
-    cube.variables[store.cube.PROVENANCE].data[...] = np.where(
+        cube[name].data.reshape(-1)[~asked] = 0
+    cube[store.cube.PROVENANCE].data[...] = np.where(
         asked, COMPUTED, INFERRED).reshape(plan.shape)
 
 

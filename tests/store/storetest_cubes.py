@@ -83,4 +83,4 @@ def averaged_cube(W=W, stable=STABLE_GRID, with_stable=True):
         np.isnan(grid), np.nan, np.where(grid == U, 0.3, -0.2)
     )
     ds["F_eff"].values[...] = np.arange(ds["F_eff"].size).reshape(ds["F_eff"].shape)
-    return ds
+    return ds.to_dataset()   # as a reader gets it (store.open_cube)

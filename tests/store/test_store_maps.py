@@ -44,7 +44,7 @@ def fig9_like_cube():
     status = np.zeros(w.shape, np.int8)
     status[50:55, :4] = store.FAILED
     ds["status"].values[...] = status[:, None, :, None]
-    return ds
+    return ds.to_dataset()   # as a reader gets it (store.open_cube)
 
 
 def test_stability_map_areas_match_the_chart(tmp_path):
