@@ -160,6 +160,24 @@ def _warn_accuracy(ds) -> None:
         print(f"ditherlab: warning: {w}", file=sys.stderr)
 
 
+def _warn_inferred(ds, sel) -> None:
+    """A refined cube's inferred points (``provenance`` 1, sweeps.refine) hold a computed
+    neighbour's outputs, which settle the map's class there (zone, stability label) but
+    are not computed values: say so once when values, not classes, are read."""
+    import store
+
+    if "provenance" not in ds:
+        return
+    flags = store.select(ds, parse_sel(sel))["provenance"].values
+    n = int((flags == 1).sum())
+    if n:
+        print(f"ditherlab: warning: {n} of {flags.size} points are inferred (provenance = 1; "
+              "the spec has refine = true): their outputs are a computed neighbour's values, "
+              "which settle the zone or stability class there but are not computed to the "
+              "accuracy level's promise; for computed values everywhere submit the spec with "
+              "refine = false", file=sys.stderr)
+
+
 def cmd_query(args) -> int:
     import store
 
@@ -170,6 +188,7 @@ def cmd_query(args) -> int:
     _warn_accuracy(ds)
     try:
         df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
+        _warn_inferred(ds, args.sel)
     except ValueError as exc:
         raise UserError(str(exc)) from None
     if args.format == "csv":
@@ -206,6 +225,8 @@ def cmd_map(args) -> int:
             "friction": store.friction_curves}[args.kind]
     try:
         draw(ds, args.output, sel=parse_sel(args.sel))
+        if args.kind == "friction":   # curves of values, not a map of classes
+            _warn_inferred(ds, args.sel)
     except ValueError as exc:
         raise RefusedError(str(exc)) from None
     print(f"wrote {args.output}")

@@ -155,3 +155,32 @@ def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path):
                    capture_output=True, timeout=600)
     a, b = (results(root / sid / "cube.nc") for root in (crashed, clean))
     assert_same_results(a, b)   # provenance, steps and every output included
+
+
+def test_values_read_from_inferred_points_carry_a_warning(tmp_path):
+    """A refined cube's inferred points hold a computed neighbour's outputs (right class,
+    not a computed value): ``query`` and ``map --kind friction`` say so in one warning
+    line; the class maps do not, nor does a query of computed points only."""
+    from .conftest import AVERAGED_SPEC, ditherlab
+
+    spec = tmp_path / "chart.toml"
+    spec.write_text(AVERAGED_SPEC.replace('name = "e2e-avg"', 'name = "chart"\nrefine = true'))
+    root = tmp_path / "store"
+    ditherlab("submit", str(spec), "-q", store=root, check=True)
+    query = ditherlab("query", "chart", "--var", "F_eff", "--format", "csv", store=root,
+                      check=True)
+    ds = sweeps.open_sweep("chart", root)
+    n_inferred = int((ds["provenance"].values == 1).sum())
+    assert 0 < n_inferred < ds["provenance"].size
+    assert f"warning: {n_inferred} of {ds['provenance'].size} points are inferred" \
+        in query.stderr
+    friction = ditherlab("map", "chart", "--kind", "friction", "-o", str(tmp_path / "f.png"),
+                         store=root, check=True)
+    assert "points are inferred" in friction.stderr
+    chart = ditherlab("map", "chart", "--kind", "stability", "-o", str(tmp_path / "s.png"),
+                      store=root, check=True)
+    assert "inferred" not in chart.stderr
+    # a selection of computed points only: no warning (the corner W = 0, v_ref = 0.02)
+    corner = ditherlab("query", "chart", "--sel", "W=0", "--sel", "v_ref=0.02", store=root,
+                       check=True)
+    assert "inferred" not in corner.stderr
