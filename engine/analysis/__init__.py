@@ -10,6 +10,8 @@ from .stability import (
     averages,
     equilibrium,
     jacobian,
+    jacobian_max_real_eig,
+    linearisation,
     max_real_eig,
     static_max_real_eig,
 )
@@ -17,7 +19,8 @@ from .stability import (
 __all__ = [
     "MODELS", "N_QUAD", "POINT_AXES", "RULES",
     "HBMResult", "analysis_block", "averaged_rhs", "averages", "contact_hbm",
-    "effective_friction", "equilibrium", "gauss_legendre", "jacobian", "max_real_eig",
+    "effective_friction", "equilibrium", "gauss_legendre", "jacobian", "jacobian_max_real_eig",
+    "linearisation", "max_real_eig",
     "negative_slope_zones", "phase_average", "sine_force_simplified", "stability_chart",
     "static_max_real_eig",
 ]

@@ -28,7 +28,7 @@ from .. import status as ST
 from .effective import effective_friction
 from .hbm import contact_hbm
 from .quadrature import N_QUAD
-from .stability import jacobian, max_real_eig, static_max_real_eig
+from .stability import linearisation, static_max_real_eig
 
 #: Columns of ``points`` (engine.batch.POINT_AXES) and the parameters they override.
 POINT_AXES = ("W", "omega", "v_ref", "vd")
@@ -73,8 +73,8 @@ def _averaged(scene, W, v_ref, vd, p, n_quad, side):
     if scene.dither == "none":
         W = np.zeros_like(W)
     if scene.friction == "lugre":
-        J, F = jacobian(v_ref, W, p, dither=scene.dither, vd=vd, n_quad=n_quad, side=side)
-        lam = max_real_eig(J)
+        _J, F, lam = linearisation(v_ref, W, p, dither=scene.dither, vd=vd, n_quad=n_quad,
+                                   side=side)
     else:
         F, dF = effective_friction(v_ref, W, p, dither=scene.dither, model="static", vd=vd,
                                    n_quad=n_quad, side=side, slope=True)

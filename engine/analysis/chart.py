@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .quadrature import N_QUAD
-from .stability import jacobian, max_real_eig
+from .stability import linearisation
 
 
 def stability_chart(W, v_ref, p, *, dither="square-velocity", vd=None, n_quad=N_QUAD,
@@ -42,8 +42,7 @@ def stability_chart(W, v_ref, p, *, dither="square-velocity", vd=None, n_quad=N_
     (bool, valid and not unstable). For PU / SU labels see the module docstring.
     """
     Wg, vg = np.meshgrid(np.asarray(W, float), np.asarray(v_ref, float), indexing="ij")
-    J, F = jacobian(vg, Wg, p, dither=dither, vd=vd, n_quad=n_quad, side=side)
-    lam = max_real_eig(J)
+    _J, F, lam = linearisation(vg, Wg, p, dither=dither, vd=vd, n_quad=n_quad, side=side)
     valid = ~np.isnan(lam)
     unstable = lam > tol                                  # NaN compares False
     return {"max_real_eig": lam, "F_eff": F, "valid": valid, "unstable": unstable,
