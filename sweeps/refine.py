@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .lattice import lattice, split
+
 AXES = ("W", "omega", "v_ref", "v_d")
 PLANES = {"simulate": ("W", "omega"), "averaged": ("W", "v_ref")}
 CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
@@ -73,35 +75,6 @@ def classify(path: str, values: np.ndarray) -> np.ndarray:
     return np.where(np.isnan(values), np.nan, out)
 
 
-def _lattice(lo: int, hi: int, stride: int) -> list[int]:
-    """Indices lo, lo+stride, ... and hi itself."""
-    out = list(range(lo, hi + 1, stride))
-    return out if out[-1] == hi else out + [hi]
-
-
-def _split(cells: np.ndarray, half: int) -> tuple[np.ndarray, np.ndarray]:
-    """Split ``cells`` ((k, 4) rows a0, a1, b0, b1) on the lattice of step ``half``
-    (:func:`_lattice` per axis): the new cells, in the order of their parents and then
-    row-major, and every lattice point of the split cells ((m, 2), with repeats)."""
-    (a, has_a), (b, has_b) = (_lattices(cells[:, i], cells[:, i + 1], half) for i in (0, 2))
-    sub = np.stack(np.broadcast_arrays(a[:, :-1, None], a[:, 1:, None],
-                                       b[:, None, :-1], b[:, None, 1:]), axis=-1)
-    keep = has_a[:, 1:, None] & has_b[:, None, 1:]
-    points = np.stack(np.broadcast_arrays(a[:, :, None], b[:, None, :]), axis=-1)
-    return sub[keep], points[has_a[:, :, None] & has_b[:, None, :]]
-
-
-def _lattices(lo: np.ndarray, hi: np.ndarray, step: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_lattice` of every ``(lo, hi)`` pair, as rows padded on the right: (the
-    points, which of them exist)."""
-    n = int(np.max((hi - lo + step - 1) // step, initial=0)) + 1
-    pts = lo[:, None] + step * np.arange(n)[None, :]
-    inside = pts < hi[:, None]
-    ends = inside.sum(axis=1)                     # the first point at or beyond hi
-    pts[np.arange(len(lo)), ends] = hi
-    return pts, np.arange(n)[None, :] <= ends[:, None]
-
-
 @dataclass
 class Plane:
     """The refinement of one 2-D plane of ``shape`` (na, nb), driven level by level."""
@@ -119,7 +92,7 @@ class Plane:
     def start(cls, shape: tuple[int, int], stride: int,
               infer_edges: bool = False) -> tuple[Plane, np.ndarray]:
         """The plane and its first (coarse) points as an ``(k, 2)`` index array."""
-        ia, ib = (_lattice(0, n - 1, stride) for n in shape)
+        ia, ib = (lattice(0, n - 1, stride) for n in shape)
         cells = np.array([(a0, a1, b0, b1) for a0, a1 in zip(ia, ia[1:])
                           for b0, b1 in zip(ib, ib[1:])], dtype=np.int64).reshape(-1, 4)
         plane = cls(shape, stride, cells, infer_edges=infer_edges)
@@ -143,7 +116,7 @@ class Plane:
         if self.infer_edges:
             self.cells, points = self._split_inferring_edges(cells, half, classes)
         else:
-            self.cells, points = _split(cells, half)
+            self.cells, points = split(cells, half)
         self.stride = half
         if not len(points):
             return np.empty((0, 2), dtype=np.int64)
@@ -156,7 +129,7 @@ class Plane:
         cls = classes.tolist()
         new_cells, points = [], []
         for a0, a1, b0, b1 in cells.tolist():
-            ia, ib = _lattice(a0, a1, half), _lattice(b0, b1, half)
+            ia, ib = lattice(a0, a1, half), lattice(b0, b1, half)
             new_cells += [(x0, x1, y0, y1) for x0, x1 in zip(ia, ia[1:])
                           for y0, y1 in zip(ib, ib[1:])]
             points += [(a, b) for a in ia for b in ib
@@ -284,8 +257,8 @@ class Refinement:
         computed before any other level, known as soon as the refinement starts."""
         multi = np.array(np.unravel_index(np.asarray(flat), self.shape))
         for ax in self.axes:
-            lattice = np.array(_lattice(0, self.shape[ax] - 1, self.stride))
-            multi[ax] = lattice[np.abs(multi[ax][:, None] - lattice[None, :]).argmin(axis=1)]
+            grid = np.array(lattice(0, self.shape[ax] - 1, self.stride))
+            multi[ax] = grid[np.abs(multi[ax][:, None] - grid[None, :]).argmin(axis=1)]
         return np.unique(np.ravel_multi_index(tuple(multi), self.shape))
 
     def sources(self) -> np.ndarray:
