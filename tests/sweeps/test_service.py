@@ -275,7 +275,7 @@ def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env
              for _ in range(2)]
     outs = [p.communicate(timeout=600) for p in procs]
     print(f"two submitters: {time.monotonic() - t0:.1f} s; " +
-          " | ".join(out.splitlines()[0] for out, _ in outs))
+          " | ".join((out.splitlines() or [f"no output; stderr: {err}"])[0] for out, err in outs))
     assert [p.returncode for p in procs] == [0, 0], outs
     assert sorted("attached to the run in" in out for out, _ in outs) == [False, True], outs
     counts = _computed(tmp_path / "blocks.log")
