@@ -26,7 +26,8 @@ FIGURES = {
 def build(ctx, only=None, log=print) -> list[FigureResult]:
     """Draw every figure (or the keys in ``only``) into ``ctx.outdir`` and write
     ``gallery.md`` and ``index.html`` there. A figure that raises is reported on the page
-    as failed (with its error) and the rest are still drawn."""
+    as ``not computed`` (with its error; never as a verdict on the paper's claim) and the
+    rest are still drawn."""
     results = []
     for key, draw in FIGURES.items():
         if only and key not in only:
@@ -35,9 +36,10 @@ def build(ctx, only=None, log=print) -> list[FigureResult]:
         try:
             res = draw(ctx)
         except Exception as exc:  # noqa: BLE001 -- one figure must not sink the page
+            error = f"{type(exc).__name__}: {exc}"
             res = FigureResult(key, key, "", "(the figure could not be computed)",
-                               ctx.png(key), [Check("computation", f"{type(exc).__name__}: "
-                                                    f"{exc}", "runs", False)])
+                               ctx.png(key), [Check("computation", error, "runs", False)],
+                               error=error)
         res.wall = time.perf_counter() - t0
         log(f"{key:<15} {res.verdict:<14} {res.wall:6.1f} s")
         results.append(res)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..errors import RefusedError
+from ..errors import EXIT_FAILED, RefusedError
 from .scenes import REGISTRY, SIZES, get_scene
 
 SCENE_COMMANDS = {"submit": "spec", "plan": "spec", "map": "sweep"}
@@ -153,4 +153,7 @@ def cmd_gallery(args) -> int:
         print(f"{r.key:<15} {r.verdict}")
     print(f"wrote {out / 'index.html'} and {out / 'gallery.md'} "
           f"({time.perf_counter() - t0:.0f} s)")
-    return 0
+    failed = [r for r in results if r.error]
+    for r in failed:
+        print(f"ditherlab: {r.key} could not be computed: {r.error}", file=sys.stderr)
+    return EXIT_FAILED if failed else 0

@@ -7,9 +7,9 @@ import html
 import time
 from collections import Counter
 
-from .verdicts import FAILS, HOLDS, PARTLY
+from .verdicts import FAILS, HOLDS, NOT_COMPUTED, PARTLY
 
-COLOURS = {HOLDS: "#2e7d32", PARTLY: "#b26a00", FAILS: "#c62828"}
+COLOURS = {HOLDS: "#2e7d32", PARTLY: "#b26a00", FAILS: "#c62828", NOT_COMPUTED: "#616161"}
 CSS = """body{font-family:sans-serif;max-width:1400px;margin:auto;padding:1em;color:#222}
 .fig{display:flex;gap:1.5em;border-top:1px solid #ccc;padding:1em 0}
 .fig img{max-width:55%;height:auto;border:1px solid #eee}
@@ -32,7 +32,8 @@ def write_page(results, ctx) -> None:
 def _head(results, size, stamp) -> str:
     n = Counter(r.verdict for r in results)
     return (f"Size `{size}`, built {stamp}. {len(results)} figures: "
-            + ", ".join(f"{n[v]} {v}" for v in (HOLDS, PARTLY, FAILS)) + ".")
+            + ", ".join(f"{n[v]} {v}" for v in (HOLDS, PARTLY, FAILS, NOT_COMPUTED)
+                         if n[v] or v != NOT_COMPUTED) + ".")
 
 
 def _numbers(r) -> str:

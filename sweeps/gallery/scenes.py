@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..errors import RefusedError
 
-SPECS = Path(__file__).resolve().parents[2] / "specs"
+SPECS = Path(__file__).resolve().parents[1] / "specs"   # sweeps/specs (the checkout's specs/)
 SIZES = ("small", "full")
 
 
@@ -96,8 +96,8 @@ def read_spec_file(file_name: str) -> dict:
         with open(path, "rb") as fh:
             return tomllib.load(fh)
     except OSError as exc:
-        raise RefusedError(f"scene spec {path} cannot be read ({exc.strerror or exc}); the "
-                           "gallery reads the specs/ folder of a source checkout") from None
+        raise RefusedError(f"scene spec {path} cannot be read ({exc.strerror or exc}); it "
+                           "ships with ditherlab: reinstall the package") from None
 
 
 def shrink(axis, count: int):

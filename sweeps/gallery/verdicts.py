@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 HOLDS, PARTLY, FAILS = "holds", "holds in part", "does not hold"
+#: a figure whose computation raised: no verdict on the paper's claim at all
+NOT_COMPUTED = "not computed"
 
 
 @dataclass
@@ -44,10 +46,11 @@ class FigureResult:
     numbers: dict[str, float] = field(default_factory=dict)
     choices: list[str] = field(default_factory=list)
     wall: float = 0.0
+    error: str | None = None          # why the figure could not be computed
 
     @property
     def verdict(self) -> str:
-        return verdict(self.checks)
+        return NOT_COMPUTED if self.error else verdict(self.checks)
 
     @property
     def reason(self) -> str:

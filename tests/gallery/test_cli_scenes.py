@@ -92,3 +92,33 @@ def test_map_pick_draws_a_handful_of_w_curves(tmp_path, capsys):
     assert main(["map", "demo-stability", "--kind", "friction", "--sel", "W=0.26",
                  "--sel", "W=0.74", "--store", store, "-o", str(out)]) == 0
     assert "(W = 0.25, 0.75)" in capsys.readouterr().out         # nearest grid values
+
+
+def test_a_figure_that_cannot_be_computed_is_not_a_verdict_and_fails_the_command(
+        capsys, tmp_path, monkeypatch):
+    """A figure whose computation raises (e.g. its spec file missing, as in a package
+    installed without specs/ before 0.2) is ``not computed`` on the page, never ``does not
+    hold`` (a verdict on the paper's claim), and ``gallery`` exits 1 naming it."""
+    from sweeps.gallery import build
+
+    def broken(ctx):
+        raise OSError("scene spec fig01-hbm.toml cannot be read")
+
+    monkeypatch.setitem(build.FIGURES, "fig01", broken)
+    status, out, err = _run(capsys, "gallery", "--only", "fig01", "-o", str(tmp_path / "g"),
+                            "--store", str(tmp_path / "store"))
+    assert status == 1
+    assert "fig01           not computed" in out
+    assert "ditherlab: fig01 could not be computed: OSError: scene spec" in err
+    page = (tmp_path / "g" / "gallery.md").read_text()
+    assert "| [fig01](#fig01) | not computed |" in page
+    assert "0 does not hold, 1 not computed" in page
+
+
+def test_the_scene_specs_ship_inside_the_package():
+    """specs/ in a checkout is a link to sweeps/specs, which the wheel carries
+    (pyproject package-data): an installed ditherlab has its scenes (CI checks it too)."""
+    assert SPECS == ROOT / "sweeps" / "specs"
+    assert (ROOT / "specs").resolve() == SPECS
+    for scene in REGISTRY.values():
+        assert (SPECS / scene.spec_file).is_file()
