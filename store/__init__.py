@@ -46,7 +46,8 @@ cube / points / cube_io
     ``.to_dataset()`` for xarray); ``output_names(ds)``; ``fill(ds, flat_index,
     values, status, cost_s, steps, evals)``; ``grid_points(ds, flat_index=None) -> (n, 4)``;
     ``pending_index(ds)``; ``status_counts(ds)``; ``publish(ds, path) -> Path``;
-    ``open_cube(path) -> xarray.Dataset``; ``read_cube(path) -> Cube``; status codes ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
+    ``open_cube(path) -> xarray.Dataset``; ``read_cube(path) -> Cube``; status codes
+    ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
 journal
     ``Journal(folder)`` with ``.write(block_id, payload)``, ``.done() -> set[int]``,
     ``.read() -> Iterator[(block_id, payload)]``; ``block_payload(...)``;

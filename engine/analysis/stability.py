@@ -19,8 +19,8 @@ involve ``e0``). Analytic Jacobian at the equilibrium::
 
 Its characteristic polynomial is ``l**3 - (a + d) l**2 + (1 + a d - b c) l - a`` with
 ``a = J00, b = J02, c = J20, d = J22`` (also used by the Routh-Hurwitz cross-check in the
-tests). Stable when every eigenvalue has a negative real part. The largest real part ``lam`` comes from that polynomial, in the kernel pass that
-makes the Jacobians (:func:`jacobian_max_real_eig`, engine.analysis.cubic: closed form,
+tests). Stable when every eigenvalue has a negative real part. The largest real part
+``lam`` comes from that polynomial, in the kernel pass that makes the Jacobians (:func:`jacobian_max_real_eig`, engine.analysis.cubic: closed form,
 Newton, stable deflation): as accurate as LAPACK's eigenvalues and ten times faster than
 ``np.linalg.eigvals`` (tests/analysis/test_analysis_cubic.py).
 

@@ -145,11 +145,23 @@ def main(argv: list[str] | None = None) -> int:
             return _fail(exc, exc.exit_status)
         except KeyboardInterrupt:
             return _fail("interrupted", EXIT_INTERRUPTED)
-        except BrokenPipeError:   # `ditherlab status | head`: the reader has what it wanted
+        except BrokenPipeError as exc:
+            if not _stdout_closed():      # a pipe of the run's own (dask): a fault
+                return _fail_unexpected(exc)
+            # `ditherlab status | head`: the reader has what it wanted
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return EXIT_FAILED
         except Exception as exc:  # noqa: BLE001 -- the one-line promise (README)
             return _fail_unexpected(exc)
+
+
+def _stdout_closed() -> bool:
+    """True when the reader of our standard output has gone (a flush breaks the pipe)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        return True
+    return False
 
 
 def _fail(message, status: int) -> int:

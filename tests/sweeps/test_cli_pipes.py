@@ -1,0 +1,32 @@
+"""A closed standard output (``ditherlab scenes | head -1``) ends the command quietly; any
+other broken pipe is a fault like the rest: one line on stderr, never silence."""
+import importlib
+import subprocess
+
+from .conftest import BIN
+
+
+def test_a_reader_that_stops_early_gets_no_error_line():
+    proc = subprocess.run(f"'{BIN}' scenes | head -1", shell=True, capture_output=True,
+                          text=True, timeout=120)
+    assert proc.stdout.startswith("scene ") and proc.stdout.count("\n") == 1
+    assert proc.stderr == ""
+
+
+def test_a_broken_pipe_elsewhere_is_one_line(capsys, monkeypatch):
+    cli = importlib.import_module("sweeps.cli.main")
+
+    def broken(args):
+        raise BrokenPipeError(32, "Broken pipe (a dask comm)")
+
+    parser = cli.build_parser
+
+    def patched():
+        ap = parser()
+        for sub in ap._subparsers._group_actions[0].choices.values():
+            sub.set_defaults(func=broken)
+        return ap
+
+    monkeypatch.setattr(cli, "build_parser", patched)
+    assert cli.main(["status"]) == 1
+    assert capsys.readouterr().err == "ditherlab: Broken pipe (a dask comm)\n"
