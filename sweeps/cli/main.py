@@ -156,12 +156,23 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _stdout_closed() -> bool:
-    """True when the reader of our standard output has gone (a flush breaks the pipe)."""
+    """True when the reader of our standard output has gone. Asked of the kernel, not by a
+    second flush: the failed write has already dropped the buffer, so a flush would succeed
+    and call the closed pipe a fault (`ditherlab scenes | head -1` printed "Broken pipe").
+    On Linux a pipe or socket whose reader has closed polls as POLLERR (or POLLHUP)."""
+    import select
+
     try:
-        sys.stdout.flush()
-    except BrokenPipeError:
-        return True
-    return False
+        fd = sys.stdout.fileno()
+        poller = select.poll()
+    except (AttributeError, OSError, ValueError):   # no poll (Windows) or no real stdout
+        try:
+            sys.stdout.flush()
+        except BrokenPipeError:
+            return True
+        return False
+    poller.register(fd, select.POLLOUT)
+    return any(mask & (select.POLLERR | select.POLLHUP) for _, mask in poller.poll(0))
 
 
 def _fail(message, status: int) -> int:

@@ -2,6 +2,7 @@
 other broken pipe is a fault like the rest: one line on stderr, never silence."""
 import importlib
 import subprocess
+import sys
 
 from .conftest import BIN
 
@@ -30,3 +31,23 @@ def test_a_broken_pipe_elsewhere_is_one_line(capsys, monkeypatch):
     monkeypatch.setattr(cli, "build_parser", patched)
     assert cli.main(["status"]) == 1
     assert capsys.readouterr().err == "ditherlab: Broken pipe (a dask comm)\n"
+
+
+def test_a_broken_pipe_elsewhere_is_one_line_with_stdout_an_open_pipe():
+    """The same with a real, still-read standard output pipe: the kernel is asked whether
+    *our* reader has gone, and it has not."""
+    code = ("import importlib, sys\n"
+            "m = importlib.import_module('sweeps.cli.main')\n"
+            "def broken(args): raise BrokenPipeError(32, 'Broken pipe (a dask comm)')\n"
+            "p = m.build_parser\n"
+            "def patched():\n"
+            "    ap = p()\n"
+            "    for sub in ap._subparsers._group_actions[0].choices.values():\n"
+            "        sub.set_defaults(func=broken)\n"
+            "    return ap\n"
+            "m.build_parser = patched\n"
+            "sys.exit(m.main(['status']))\n")
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 1
+    assert proc.stderr == "ditherlab: Broken pipe (a dask comm)\n"
