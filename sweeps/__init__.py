@@ -28,6 +28,7 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
     submod_attrs={
         "api": ["open_sweep", "run_sweep"],
+        "errors": ["InferredPointsWarning"],
         "plan": ["Plan", "make_plan"],
         "outcome": ["SubmitResult"],
         "run": ["submit"],

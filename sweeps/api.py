@@ -12,7 +12,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .lookup import catalogue, resolve_sweep, stale_note, store_root
+from .errors import InferredPointsWarning
+from .lookup import catalogue, inferred_note, resolve_sweep, stale_note, store_root
 from .spec import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
@@ -71,7 +72,9 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
     ``chunks=None`` (default) loads it into memory and closes the file; ``chunks={}`` or a
     dict of sizes per axis opens it lazily as dask arrays (close it with ``ds.close()`` or
     a ``with`` block). A ``UserWarning`` when it was made by another engine than the
-    installed one. Raises ``sweeps.errors.UserError`` when no sweep matches, and its
+    installed one; a :class:`sweeps.InferredPointsWarning` when it is refined
+    (``refine = true``) with inferred points, whose outputs are a computed neighbour's
+    (``ds.where(ds.provenance == 0)`` keeps the computed ones). Raises ``sweeps.errors.UserError`` when no sweep matches, and its
     subclass ``AmbiguousSweepError`` (also a ``LookupError``) when a name fits several
     current sweeps, listing them: pass an id.
     """
@@ -90,4 +93,7 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
     note = stale_note(catalogue(root).get(sweep_id), ds, root)
     if note:
         warnings.warn(note, stacklevel=2)
+    note = inferred_note(ds["provenance"].values) if "provenance" in ds else None
+    if note:
+        warnings.warn(f"sweep {sweep_id}: {note}", InferredPointsWarning, stacklevel=2)
     return ds

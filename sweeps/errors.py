@@ -34,6 +34,12 @@ class Interrupted(Exception):
     exit_status = EXIT_INTERRUPTED
 
 
+class InferredPointsWarning(UserWarning):
+    """A refined sweep's cube (``refine = true``) holds inferred points, whose outputs are a
+    computed neighbour's: they settle the map's class there, not the values. Filter it
+    where only classes are read: ``warnings.simplefilter("ignore", InferredPointsWarning)``."""
+
+
 class SpecError(ValueError):
     """A refused spec; ``problems`` holds one message per fault (at most
     :data:`MAX_PROBLEMS` lines of at most :data:`MAX_LINE` characters)."""

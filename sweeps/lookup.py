@@ -103,3 +103,21 @@ def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
     spec = f" (e.g. {saved})" if saved is not None and saved.exists() else ""
     return (f"sweep {row['sweep_id']} was made by engine {made}, the installed engine is "
             f"{results_fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
+
+
+def inferred_note(provenance) -> str | None:
+    """One line saying how many of these points a refined sweep inferred, or None.
+
+    ``provenance`` is the cube's flag (sweeps.refine: 0 computed, 1 inferred), whole or a
+    selection. An inferred point holds a computed neighbour's outputs: they settle the
+    map's class there (zone, stability label) but are not computed values."""
+    import numpy as np
+
+    flags = np.asarray(provenance)
+    n = int((flags == 1).sum())
+    if not n:
+        return None
+    return (f"{n} of {flags.size} points are inferred (provenance = 1; the spec has "
+            "refine = true): their outputs are a computed neighbour's values, which settle the "
+            "zone or stability class there but are not computed to the accuracy level's "
+            "promise; for computed values everywhere submit the spec with refine = false")

@@ -10,7 +10,8 @@ import sys
 from pathlib import Path
 
 from ..errors import RefusedError, UserError
-from ..lookup import STALE, catalogue, is_stale, resolve_sweep, stale_note, store_root
+from ..lookup import (STALE, catalogue, inferred_note, is_stale, resolve_sweep, stale_note,
+                      store_root)
 
 
 def parse_sel(items: list[str] | None) -> dict[str, float]:
@@ -161,21 +162,13 @@ def _warn_accuracy(ds) -> None:
 
 
 def _warn_inferred(ds, sel) -> None:
-    """A refined cube's inferred points (``provenance`` 1, sweeps.refine) hold a computed
-    neighbour's outputs, which settle the map's class there (zone, stability label) but
-    are not computed values: say so once when values, not classes, are read."""
+    """Values, not classes, read from a refined cube's inferred points: say so once."""
     import store
 
-    if "provenance" not in ds:
-        return
-    flags = store.select(ds, parse_sel(sel))["provenance"].values
-    n = int((flags == 1).sum())
-    if n:
-        print(f"ditherlab: warning: {n} of {flags.size} points are inferred (provenance = 1; "
-              "the spec has refine = true): their outputs are a computed neighbour's values, "
-              "which settle the zone or stability class there but are not computed to the "
-              "accuracy level's promise; for computed values everywhere submit the spec with "
-              "refine = false", file=sys.stderr)
+    if "provenance" in ds:
+        note = inferred_note(store.select(ds, parse_sel(sel))["provenance"].values)
+        if note:
+            print(f"ditherlab: warning: {note}", file=sys.stderr)
 
 
 def cmd_query(args) -> int:

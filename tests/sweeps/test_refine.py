@@ -8,6 +8,7 @@ import os
 import signal
 import subprocess
 import time
+import warnings
 
 import numpy as np
 import pytest
@@ -95,7 +96,9 @@ def _pair(spec: dict, root):
     ref = sweeps.run_sweep({**spec, "name": spec["name"] + "-r", "refine": True}, store=root,
                            progress=False)
     assert full.state == ref.state == "done"
-    return sweeps.open_sweep(full.sweep_id, root), sweeps.open_sweep(ref.sweep_id, root)
+    with warnings.catch_warnings():   # classes are compared; inferred values are expected
+        warnings.simplefilter("ignore", sweeps.InferredPointsWarning)
+        return sweeps.open_sweep(full.sweep_id, root), sweeps.open_sweep(ref.sweep_id, root)
 
 
 def test_refined_stability_chart_labels_equal_the_full_grid(tmp_path):
@@ -169,9 +172,12 @@ def test_values_read_from_inferred_points_carry_a_warning(tmp_path):
     ditherlab("submit", str(spec), "-q", store=root, check=True)
     query = ditherlab("query", "chart", "--var", "F_eff", "--format", "csv", store=root,
                       check=True)
-    ds = sweeps.open_sweep("chart", root)
+    with pytest.warns(sweeps.InferredPointsWarning, match=r"sweep \w+: \d+ of \d+ points are "
+                      "inferred") as caught:
+        ds = sweeps.open_sweep("chart", root)
     n_inferred = int((ds["provenance"].values == 1).sum())
     assert 0 < n_inferred < ds["provenance"].size
+    assert f": {n_inferred} of {ds['provenance'].size} points" in str(caught[0].message)
     assert f"warning: {n_inferred} of {ds['provenance'].size} points are inferred" \
         in query.stderr
     friction = ditherlab("map", "chart", "--kind", "friction", "-o", str(tmp_path / "f.png"),
