@@ -164,7 +164,9 @@ class Catalogue(LeaseMixin):
         the same name; readers compare it with the installed engine's).
 
         A known sweep keeps its state, counts and creation time; its name, spec,
-        sizes, path and fingerprint are overwritten. Returns the row.
+        sizes, path and fingerprint are overwritten. An earlier name is kept in ``aliases``
+        (the same spec submitted under another name: a name is not part of a sweep's
+        identity) and still finds the sweep. Returns the row.
         """
         now = utc_now()
         row = dict(
@@ -228,9 +230,9 @@ class Catalogue(LeaseMixin):
 
     def matches(self, key: str) -> list[dict]:
         """Every sweep a user may mean by ``key``, newest first: the sweep of that exact
-        id, else every sweep of that name, else every sweep whose id starts with ``key``
-        (cubes without a row are adopted first when nothing matches). Deciding between
-        several is the caller's (``sweeps.lookup``: only current sweeps count)."""
+        id, else every sweep of that name (or earlier name), else every sweep whose id
+        starts with ``key`` (cubes without a row are adopted first when nothing matches).
+        Deciding between several is the caller's (``sweeps.lookup``: only current ones)."""
         for attempt in range(2):
             rows = self._match(str(key))
             if rows or (attempt == 0 and not self.scan()):
@@ -251,7 +253,8 @@ class Catalogue(LeaseMixin):
     def _match(self, key: str) -> list[dict]:
         newest = " ORDER BY created DESC, sweep_id"
         return (self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
-                or self._query("SELECT * FROM sweeps WHERE name = ?" + newest, (key,))
+                or self._query("SELECT * FROM sweeps WHERE name = ? OR instr(char(10) || "
+                               "aliases, char(10) || ? || char(10))" + newest, (key, key))
                 or self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?" + newest,
                                (len(key), key)))
 

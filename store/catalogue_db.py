@@ -43,6 +43,7 @@ ADDED_COLUMNS = (
     ("run_start_blocks", "INTEGER NOT NULL DEFAULT 0"),   # done_blocks at that instant
     ("queued_at", "TEXT NOT NULL DEFAULT ''"),       # serve runs the oldest first
     ("engine_fingerprint", "TEXT NOT NULL DEFAULT ''"),   # engine that computes it ('' unknown)
+    ("aliases", "TEXT NOT NULL DEFAULT ''"),         # earlier names, each ended by a newline
 )
 SERVERS = """
 CREATE TABLE IF NOT EXISTS servers (
@@ -59,6 +60,9 @@ INSERT INTO sweeps (sweep_id, name, state, spec_json, n_points, n_blocks, done_p
 VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points,
         :failed_points, :done_blocks, :path, :created, :updated, :created, :engine_fingerprint)
 ON CONFLICT(sweep_id) DO UPDATE SET name = excluded.name, spec_json = excluded.spec_json,
+    aliases = CASE WHEN sweeps.name = excluded.name
+                     OR instr(char(10) || sweeps.aliases, char(10) || sweeps.name || char(10))
+                   THEN sweeps.aliases ELSE sweeps.aliases || sweeps.name || char(10) END,
     n_points = excluded.n_points, n_blocks = excluded.n_blocks, path = excluded.path,
     updated = excluded.updated, engine_fingerprint = excluded.engine_fingerprint"""
 ADOPT = """

@@ -1,12 +1,12 @@
 """Questions asked of a cube: zone maps, stability charts, friction curves, tables.
 
 Every function takes a cube (``xarray.Dataset`` with dims ``AXES``, or a
-``store.cubedata.Cube``) and an optional
-``sel``: a dict ``axis -> value`` picking the nearest grid value of that axis
-(``{"v_d": 0.1}``; strings such as ``"0.1"`` from a command line are accepted).
-A value beyond either end of the grid by more than half the end step (a relative
-1e-9 on a one-value axis) is refused, so asking for ``v_d = 0.01`` of a cube that
-holds only ``v_d = 0.1`` is an error, not a silent substitution. Points whose ``status`` is not ok come out as NaN (or ``NO_DATA``).
+``store.cubedata.Cube``) and an optional ``sel``: a dict ``axis -> value`` picking the
+nearest grid value of that axis (``{"v_d": 0.1}``; strings such as ``"0.1"`` are accepted).
+A value beyond either end of the grid by more than half the end step (a relative 1e-9 on
+a one-value axis), or NaN, is refused: asking for ``v_d = 0.01`` of a cube that holds only
+``v_d = 0.1`` is an error, not a silent substitution. Points whose ``status`` is not ok
+come out as NaN (or ``NO_DATA``).
 
 ``stability_labels`` is the one implementation of the PU / SU rule of DESIGN.md §1
 (connected components in the ``(v_ref, W)`` plane): ``stability_chart`` and the maps use
@@ -37,6 +37,12 @@ def _nearest(ds: xr.Dataset, axis: str, value) -> int:
     except (TypeError, ValueError):
         raise ValueError(f"sel[{axis!r}]: expected a number, got {value!r}") from None
     grid = ds[axis].values
+    if not np.isfinite(x):   # NaN is off every grid; inf only on an axis holding it (omega)
+        if (grid == x).any():
+            return int(np.flatnonzero(grid == x)[0])
+        raise ValueError(
+            f"sel[{axis!r}] = {x:g} is off the grid; available {axis} values: {_show(grid)}"
+        )
     ordered = np.sort(grid)
     i = int(np.argmin(np.abs(grid - x)))
     if grid.size == 1:
@@ -222,6 +228,8 @@ def stability_labels(
 def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
     """Stable / primary unstable (PU) / secondary unstable (SU) labels (Fig. 9).
 
+    ``sel`` fixes the other axes; ``v_ref`` or ``W`` in it cut the labelled chart.
+
     A point is unstable where ``stable == 0`` (or, without that output,
     ``max_real_eig > 0``). Labels by connected components, DESIGN.md §1, as computed by
     :func:`stability_labels`: PU = an unstable point whose 4-neighbour component of
@@ -238,6 +246,8 @@ def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
         ``NO_DATA`` -1; a CF flag variable (``flag_values``, ``flag_meanings``).
     """
     source = _stability_source(ds)
+    sel = dict(sel or {})
+    cut = {axis: sel.pop(axis) for axis in ("v_ref", "W") if axis in sel}
     values = plane(ds, source, ("v_ref", "W"), sel, "stability_chart").sortby(["v_ref", "W"])
     valid = values.notnull()
     unstable = (values == 0) if source == "stable" else (values > 0)
@@ -249,7 +259,8 @@ def stability_chart(ds: xr.Dataset, sel=None) -> xr.DataArray:
         "flag_values": np.array([NO_DATA, STABLE, PU, SU], dtype=np.int8),
         "flag_meanings": STABILITY_MEANINGS,
     }
-    return chart
+    # a cut (sel of v_ref or W) is labelled in the whole plane: alone, PU would read SU
+    return chart.isel({axis: [_nearest(chart, axis, value)] for axis, value in cut.items()})
 
 
 def effective_friction_curve(ds: xr.Dataset, sel=None, var: str | None = None) -> xr.DataArray:
@@ -283,7 +294,7 @@ def table(ds: xr.Dataset, var: str | None = None, sel=None) -> pd.DataFrame:
     for name in names:
         _variable(ds, name, "table")
     extra = [d for n in names for d in ds[n].dims[len(AXES):]]
-    flags = ["provenance"] if "provenance" in ds else []   # refined sweeps
+    flags = [PROVENANCE] if PROVENANCE in ds and PROVENANCE not in names else []   # refined
     sub = select(ds, sel)[names + ["status"] + flags]
     frame = sub.to_dataframe().reset_index()
     return frame[list(AXES) + extra + names + ["status"] + flags]

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from .errors import InferredPointsWarning
-from .lookup import catalogue, inferred_note, resolve_sweep, stale_note, store_root
+from .lookup import catalogue, check_cube_of, inferred_note, resolve_sweep, stale_note, store_root
 from .spec import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
@@ -74,7 +74,8 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
     a ``with`` block). A ``UserWarning`` when it was made by another engine than the
     installed one; a :class:`sweeps.InferredPointsWarning` when it is refined
     (``refine = true``) with inferred points, whose outputs are a computed neighbour's
-    (``ds.where(ds.provenance == 0)`` keeps the computed ones). Raises ``sweeps.errors.UserError`` when no sweep matches, and its
+    (``ds.where(ds.provenance == 0)`` keeps the computed ones). Raises
+    ``sweeps.errors.UserError`` when no sweep matches or the cube is another sweep's, and its
     subclass ``AmbiguousSweepError`` (also a ``LookupError``) when a name fits several
     current sweeps, listing them: pass an id.
     """
@@ -90,6 +91,11 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
         ds = _store.open_cube(cube)
     else:
         ds = xr.open_dataset(cube, engine="h5netcdf", chunks=chunks, decode_timedelta=False)
+    try:
+        check_cube_of(ds, sweep_id, cube)
+    except Exception:
+        ds.close()
+        raise
     note = stale_note(catalogue(root).get(sweep_id), ds, root)
     if note:
         warnings.warn(note, stacklevel=2)

@@ -66,6 +66,7 @@ def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:
         workers = 1  # the analysis paths run in the submitting process
     per_point = _time_block(plan, pts)
     n_tasks = len(plan.blocks)
+    workers = max(1, min(workers, n_tasks))   # a block is one worker's: fewer blocks, fewer busy
     wall = plan.n_points * per_point / workers + n_tasks * TASK_OVERHEAD_S / workers
     return Estimate(level, plan.numerics.integrator, per_point, wall)
 

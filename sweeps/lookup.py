@@ -52,6 +52,9 @@ def resolve_sweep(root: Path, key: str, need_cube: bool = True) -> tuple[str, Pa
     sweep_id = rows[0]["sweep_id"]
     cube = store.SweepDir(root, sweep_id).cube
     if need_cube and not cube.exists():
+        if rows[0].get("state") == "queued":
+            raise UserError(f"sweep {sweep_id} is queued and has no cube yet; `ditherlab serve` "
+                            f"computes it (or `ditherlab submit` it without --detach)")
         raise UserError(f"sweep {sweep_id} has no cube yet at {cube}; submit it again")
     return sweep_id, cube
 
@@ -103,6 +106,19 @@ def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
     spec = f" (e.g. {saved})" if saved is not None and saved.exists() else ""
     return (f"sweep {row['sweep_id']} was made by engine {made}, the installed engine is "
             f"{results_fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
+
+
+def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
+    """Refuse to serve a cube that another sweep wrote (a file copied or moved between
+    sweep folders): its numbers would be served as this sweep's, with status ok."""
+    from store.layout import SPEC_NAME
+
+    found = ds.attrs.get("sweep_id")
+    if found is not None and str(found) != sweep_id:
+        spec = cube.parent / SPEC_NAME
+        how = f" (ditherlab submit {spec} --store {cube.parent.parent})" if spec.exists() else ""
+        raise UserError(f"the cube at {cube} is sweep {found}'s, not {sweep_id}'s; submit the "
+                        f"spec again{how} to republish it from the journal")
 
 
 def inferred_note(provenance) -> str | None:

@@ -89,8 +89,14 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     _check_space(plan, sweep, cube, todo)
     sweep.root.mkdir(parents=True, exist_ok=True)
     sweep.write_spec(plan.spec.to_json())
+    earlier = [r["name"] for r in catalogue.matches(plan.sweep_id)
+               if r["sweep_id"] == plan.sweep_id]
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
                        len(plan.blocks), sweep.root, results_fingerprint())
+    renamed = bool(earlier) and earlier[0] != plan.spec.name
+    if renamed:   # the same spec under another name (a name is not part of a sweep's id)
+        log.warning("sweep %s is named %r now, %r before (the same spec under another name); "
+                    "both names find it", plan.sweep_id, plan.spec.name, earlier[0])
     lease, attached = _take_lease(plan, catalogue, owner, stop, progress)
     if lease is None:
         return attached_result(plan, sweep, attached, t0)
@@ -108,7 +114,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         attach_saved_estimate(sweep, cube)
         todo = blocks_to_run(plan, cube)
         if sweep.cube.exists() or not todo or not in_process(plan, scheduler):
-            _republish(plan, sweep, cube)  # a valid cube, equal to the journal, from the start
+            _republish(plan, sweep, cube, renamed)  # a valid cube, equal to the journal
         # (an in-process sweep with work to do and no cube yet, seconds of work, publishes
         # after PUBLISH_EVERY_S and at its end: a first publish was 0.13 s of a 1.7 s
         # averaged 400x400 chart)
@@ -172,11 +178,13 @@ def _check_space(plan: Plan, sweep, cube, todo: list[int]) -> None:
     store.errors.ensure_space(sweep.root, need + store.cube_io.cube_bytes(cube))
 
 
-def _republish(plan: Plan, sweep, cube) -> None:
+def _republish(plan: Plan, sweep, cube, renamed: bool = False) -> None:
     """Publish ``cube`` (rebuilt from the journal), saying so when the published cube
     was missing, unreadable or different (a run killed before its last publish, a
-    damaged file)."""
+    damaged file), but not for the new name alone of a renamed sweep (said already)."""
     why = store.cube_io.disagreement(sweep.cube, cube) if sweep.cube.exists() else None
+    if renamed and why == "the cube's attributes differ from the journal's":
+        why = None
     store.publish(cube, sweep.cube)
     if why:
         log.warning("sweep %s: %s; republished it from the journal", plan.sweep_id, why)

@@ -30,11 +30,19 @@ from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
 DEFAULT_MAX_POINTS = 250_000   # sweeps.spec.DEFAULT_MAX_POINTS (a test checks they agree)
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse, but a refused argument is one line (the promise of every fault), with where
+    to look instead of the usage block: ``ditherlab query: error: ... (ditherlab query -h)``."""
+
+    def error(self, message):
+        self.exit(EXIT_REFUSED, f"{self.prog}: error: {message} (see {self.prog} -h)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="ditherlab", description="Parameter sweeps of friction "
+    ap = _OneLineParser(prog="ditherlab", description="Parameter sweeps of friction "
                                  "dynamics under dither: submit, inspect, query, draw.")
     ap.add_argument("--version", action="version", version=f"ditherlab {_version()}")
-    common = argparse.ArgumentParser(add_help=False)
+    common = _OneLineParser(add_help=False)
     common.add_argument("--store", help="store folder (default $DITHERLAB_STORE or "
                         "./ditherlab-store)")
     talk = common.add_mutually_exclusive_group()

@@ -6,25 +6,41 @@ store path that does not exist stays absent and a read-only store works.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from pathlib import Path
 
-from ..errors import RefusedError, UserError
-from ..lookup import (STALE, catalogue, inferred_note, is_stale, resolve_sweep, stale_note,
-                      store_root)
+from ..errors import RefusedError
+from ..lookup import (STALE, catalogue, check_cube_of, inferred_note, is_stale, resolve_sweep,
+                      stale_note, store_root)
 
 
 def parse_sel(items: list[str] | None) -> dict[str, float]:
+    """``--sel AXIS=VALUE ...`` as a dict; an axis given twice is refused (one value each;
+    ``map --kind friction`` takes several W curves before this, sweeps.gallery.cli)."""
     sel = {}
     for item in items or ():
         axis, eq, value = item.partition("=")
+        axis = axis.strip()
         if not eq:
             raise RefusedError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
+        if axis in sel:
+            raise RefusedError(f"--sel {axis}: given twice ({sel[axis]:g} and {value.strip()}); "
+                               f"a selection takes one value per axis")
         try:
-            sel[axis.strip()] = float(value)
+            sel[axis] = float(value)
         except ValueError:
             raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
     return sel
+
+
+def _json_value(x):
+    """A table cell for JSON: full precision (repr), NaN (not computed) as null, an
+    infinite value (omega = inf, the averaged limit) as the string "inf" / "-inf"."""
+    if isinstance(x, float):
+        return None if x != x else ("inf" if x == math.inf else "-inf" if x == -math.inf
+                                    else x)
+    return x
 
 
 def _warn_stale(root: Path, sweep_id: str, ds) -> None:
@@ -161,7 +177,7 @@ def _warn_accuracy(ds) -> None:
         print(f"ditherlab: warning: {w}", file=sys.stderr)
 
 
-def _warn_inferred(ds, sel) -> None:
+def warn_inferred(ds, sel) -> None:
     """Values, not classes, read from a refined cube's inferred points: say so once."""
     import store
 
@@ -174,20 +190,24 @@ def _warn_inferred(ds, sel) -> None:
 def cmd_query(args) -> int:
     import store
 
+    sel = parse_sel(args.sel)   # a malformed selection is refused before the store is read
     root = store_root(args.store)
     sweep_id, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    check_cube_of(ds, sweep_id, cube)
     _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
     try:
-        df = store.table(ds, var=args.var, sel=parse_sel(args.sel))
-        _warn_inferred(ds, args.sel)
+        df = store.table(ds, var=args.var, sel=sel)
+        warn_inferred(ds, args.sel)
     except ValueError as exc:
-        raise UserError(str(exc)) from None
+        raise RefusedError(str(exc)) from None
     if args.format == "csv":
         sys.stdout.write(df.to_csv(index=False))
-    elif args.format == "json":
-        print(json.dumps(json.loads(df.to_json(orient="records")), indent=1))
+    elif args.format == "json":   # not DataFrame.to_json: it rounds to 10 decimals, inf -> null
+        rows = [{k: _json_value(v) for k, v in row.items()}
+                for row in df.to_dict(orient="records")]
+        print(json.dumps(rows, indent=1))
     else:
         print(df.to_string(index=False))
     return 0
@@ -205,21 +225,39 @@ def open_for_map(args):
     root = store_root(args.store)
     sweep_id, cube = resolve_sweep(root, args.sweep)
     ds = store.open_cube(cube)
+    check_cube_of(ds, sweep_id, cube)
     _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
     return ds
 
 
+MAP_AXES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W")}   # a map's own plane
+
+
+def refuse_map_axes(args) -> None:
+    """``--sel`` of an axis the map is drawn over is refused, not drawn as a one-column map
+    (a stability cut labelled alone would also lose its PU link to W = 0)."""
+    plane = MAP_AXES.get(args.kind, ())
+    fixed = [s.partition("=")[0].strip() for s in args.sel or ()
+             if s.partition("=")[0].strip() in plane]
+    if fixed:
+        raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {args.kind} map "
+                           f"({' x '.join(plane)}), not a value to fix; `ditherlab query` "
+                           f"reads a cut through it")
+
+
 def cmd_map(args) -> int:
     import store
 
+    refuse_map_axes(args)
+    parse_sel(args.sel)   # a malformed selection is refused before the store is read
     ds = open_for_map(args)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]
     try:
         draw(ds, args.output, sel=parse_sel(args.sel))
         if args.kind == "friction":   # curves of values, not a map of classes
-            _warn_inferred(ds, args.sel)
+            warn_inferred(ds, args.sel)
     except ValueError as exc:
         raise RefusedError(str(exc)) from None
     print(f"wrote {args.output}")

@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ..errors import EXIT_FAILED, Interrupted, UserError
-from ..lookup import store_root
+from ..lookup import resolve_sweep, store_root
 
 
 def _load(args):
@@ -94,8 +94,10 @@ def cmd_cancel(args) -> int:
 
     from ..service import cancel
 
+    root = store_root(args.store)
+    sweep_id, _ = resolve_sweep(root, args.sweep, need_cube=False)   # as query finds it
     try:
-        row = cancel(store_root(args.store), args.sweep, wait=args.wait)
+        row = cancel(root, sweep_id, wait=args.wait)
     except LookupError as exc:
         raise UserError(str(exc)) from None
     state, sid = store.Catalogue.live_state(row), row["sweep_id"]

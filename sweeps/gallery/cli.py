@@ -96,11 +96,13 @@ def _map_picked(args) -> int:
 
     import store
 
-    from ..cli.reading import open_for_map, parse_sel
+    from ..cli.reading import open_for_map, parse_sel, refuse_map_axes, warn_inferred
     from .scenes import shrink
 
     if args.kind != "friction":
-        raise RefusedError("--pick and repeated --sel W=... apply to --kind friction only")
+        refuse_map_axes(args)   # --sel W of a stick-slip or stability map
+        raise RefusedError(f"--pick applies to --kind friction only (curves of W), not to "
+                           f"--kind {args.kind}")
     wanted = _w_list(args.sel)
     if args.pick is not None and wanted:
         raise RefusedError("give --pick N or --sel W=VALUE, not both")
@@ -111,11 +113,15 @@ def _map_picked(args) -> int:
     if args.pick is not None:
         keep = shrink(list(grid), args.pick)
     else:
-        keep = sorted({float(grid[np.argmin(abs(grid - parse_sel([w])["W"]))])
-                       for w in wanted})
+        try:   # each the nearest grid value, off the grid refused as by query
+            keep = sorted({float(store.select(ds, parse_sel([w]))["W"].values[0])
+                           for w in wanted})
+        except ValueError as exc:
+            raise RefusedError(str(exc)) from None
     rest = [s for s in args.sel or () if s not in wanted]
     try:
         store.friction_curves(ds.sel(W=keep), args.output, sel=parse_sel(rest))
+        warn_inferred(ds.sel(W=keep), rest)   # curves are values: inferred ones are said
     except ValueError as exc:
         raise RefusedError(str(exc)) from None
     print(f"wrote {args.output} (W = {', '.join(f'{w:g}' for w in keep)})")

@@ -152,3 +152,26 @@ def test_zone_map_of_a_cube_with_a_vector_output(tmp_path):
     np.testing.assert_array_equal(store.zone_map(ds).values, [[0, 1, 1], [0, 0, 1]])
     store.stick_slip_map(ds, tmp_path / "zones.png")
     assert (tmp_path / "zones.png").stat().st_size > 1000
+
+
+def test_a_cut_through_the_chart_is_labelled_in_the_whole_plane():
+    """Column v_ref = 0.4 of STABLE_GRID is unstable at W = 0.2, 0.4 only: alone it would
+    not reach W = 0 (SU), but through its neighbours' band it does, so PU (EXPECTED)."""
+    ds = averaged_cube()
+    cut = store.stability_chart(ds, sel={"v_d": 0.1, "v_ref": 0.4})
+    assert cut.sizes == {"v_ref": 1, "W": 6}
+    np.testing.assert_array_equal(cut.values[0], EXPECTED[:, 3])
+    point = store.stability_chart(ds, sel={"v_d": 0.1, "v_ref": 0.4, "W": 0.2})
+    assert point.values.tolist() == [[PU]]
+
+
+@pytest.mark.parametrize("axis, value", [("W", float("nan")), ("W", "nan"), ("v_ref", "inf"),
+                                         ("omega", float("-inf"))])
+def test_a_non_finite_selection_off_the_grid_is_refused(axis, value):
+    with pytest.raises(ValueError, match=rf"sel\['{axis}'\] = -?(nan|inf) is off the grid"):
+        store.select(averaged_cube(), {axis: value})
+
+
+def test_an_infinite_grid_value_is_selected_exactly():
+    ds = averaged_cube().assign_coords(omega=[np.inf])   # the averaged limit, omega = inf
+    assert store.select(ds, {"omega": "inf"})["omega"].values.tolist() == [np.inf]

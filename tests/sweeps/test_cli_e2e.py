@@ -122,10 +122,10 @@ def test_unknown_sweep_and_bad_selection(tmp_path, spec_file):
     proc = ditherlab("query", "nosuch", store=store)
     assert proc.returncode == 1 and "no sweep 'nosuch'" in proc.stderr
     ditherlab("submit", str(spec_file(AVERAGED_SPEC)), "--quiet", store=store, check=True)
-    proc = ditherlab("query", "e2e-avg", "--var", "nonsense", store=store)
-    assert proc.returncode == 1 and "nonsense" in proc.stderr
+    proc = ditherlab("query", "e2e-avg", "--var", "nonsense", store=store)   # refused: 2
+    assert proc.returncode == 2 and "nonsense" in proc.stderr
     proc = ditherlab("query", "e2e-avg", "--sel", "W:0.1", store=store)
-    assert proc.returncode == 1 and "AXIS=VALUE" in proc.stderr
+    assert proc.returncode == 2 and "AXIS=VALUE" in proc.stderr
 
 
 def test_harmonic_balance_sweep_fig1_loop_grows_then_shrinks(tmp_path):
