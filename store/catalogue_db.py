@@ -137,10 +137,10 @@ def row_from_cube(cube: Path) -> dict | None:
         return None
     failed = int(np.count_nonzero((status == FAILED) | (status == NON_FINITE)))
     pending = int(np.count_nonzero(status == NOT_COMPUTED))
-    created = (
-        attrs.get(A.CREATED)
-        or datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat()
-    )
+    # the cube's last publish, not this command's time ("finished" in `ditherlab status`)
+    published = datetime.fromtimestamp(cube.stat().st_mtime, timezone.utc).isoformat(
+        timespec="milliseconds")
+    created = attrs.get(A.CREATED) or published
     spec = attrs.get(A.SPEC, "{}")
     if pending:
         state, message = "cancelled", (f"found as a cube with {pending} points not computed; "
@@ -160,6 +160,6 @@ def row_from_cube(cube: Path) -> dict | None:
         done_blocks=0,
         path=str(cube.parent),
         created=str(created),
-        updated=utc_now(),
+        updated=published,
         engine_fingerprint=str(attrs.get(A.FINGERPRINT, "")),
     )

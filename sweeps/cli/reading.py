@@ -60,6 +60,7 @@ def cmd_status(args) -> int:
     if args.sweep:
         sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
         row = cat.get(sweep_id)
+        row["path"] = str(cube.parent)   # where it is now (a store may have been moved)
         ds = _header(cube) if cube.exists() else None
         live, note = cat.live_state(row), stale_note(row, ds, root)
         row["state"] = f"{live} ({STALE})" if note else live
@@ -129,7 +130,10 @@ def _shown(row: dict, live: str) -> dict:
 
     from ..service import format_seconds, progress_text
 
-    shown = {k: v for k, v in row.items() if k != "spec_json"}
+    shown = {k: v for k, v in row.items() if k not in ("spec_json", "aliases")}
+    earlier = [a for a in str(row.get("aliases") or "").splitlines() if a and a != row["name"]]
+    if earlier:   # the same spec submitted under other names before; they still find it
+        shown["also_named"] = ", ".join(earlier)
     beat = float(row.get("heartbeat") or 0.0)
     shown["heartbeat"] = f"{time.time() - beat:.1f} s ago" if beat else "-"
     started = float(row.get("run_started") or 0.0)

@@ -119,6 +119,10 @@ def cmd_plan(args) -> int:
 
     spec = _load(args)
     plan = make_plan(spec)
+    if args.record:   # a store path that cannot be one is refused before the calibration
+        import store
+
+        store.layout.check_store(store_root(args.store), write=False)
     shape = " x ".join(f"{a}={len(v)}" for a, v in plan.coords.items())
     print(f"sweep      {plan.sweep_id}  '{spec.name}'")
     print(f"points     {plan.n_points}  ({shape})  in {len(plan.blocks)} interleaved blocks")

@@ -1,6 +1,7 @@
 """The SQLite catalogue: register / update / find / list, adoption of cubes without a row,
 and several processes writing at once (DESIGN.md §6, service mode)."""
 
+import os
 import sqlite3
 import subprocess
 import sys
@@ -117,6 +118,14 @@ def test_cube_without_row_is_adopted(tmp_path):
         2,
     )
     assert [r["sweep_id"] for r in cat.list()] == ["feed01"]
+    # its last update is the cube's last publish, not the time it was adopted
+    cube = store.SweepDir(tmp_path, "feed01").cube
+    os.utime(cube, (1_700_000_000, 1_700_000_000))
+    cat.close()
+    (tmp_path / "catalogue.sqlite").unlink()
+    for extra in tmp_path.glob("catalogue.sqlite-*"):
+        extra.unlink()
+    assert store.Catalogue(tmp_path).find("orphan")["updated"] == "2023-11-14T22:13:20.000+00:00"
 
 
 WORKER = """

@@ -117,3 +117,17 @@ def test_maps_refuse_what_the_queries_refuse(tmp_path):
 )
 def test_log_spacing_detection(values, log):
     assert M.is_log_spaced(values) is log
+
+
+def test_an_output_path_that_cannot_be_a_figure_says_why(tmp_path):
+    """A file where the folder should be, and a folder where the file should be: each its
+    own line (the first was reported as a missing folder to mkdir, the second as a temp
+    file's 'Is a directory' after the figure was drawn)."""
+    (tmp_path / "afile").write_text("")
+    (tmp_path / "d.png").mkdir()
+    with pytest.raises(ValueError, match=r"afile is a file, not a folder$"):
+        store.figure_format(tmp_path / "afile" / "x.png")
+    with pytest.raises(ValueError, match=r"d.png: it is a folder; name a file$"):
+        store.figure_format(tmp_path / "d.png")
+    with pytest.raises(ValueError, match=r"the folder .*nope does not exist \(create it first"):
+        store.figure_format(tmp_path / "nope" / "x.png")

@@ -70,6 +70,9 @@ def test_the_same_spec_under_a_second_name_keeps_the_first(shelf, tmp_path):
     for name in ("tiny", "bob"):
         assert ditherlab("query", name, "--format", "csv", store=root, check=True).stdout == \
             ditherlab("query", sid, "--format", "csv", store=root, check=True).stdout
+    shown = ditherlab("status", "tiny", store=root, check=True).stdout
+    assert "name: bob" in shown and "also_named: tiny" in shown
+    assert f"path: {root / sid}" in shown   # the copied store's folder, not the original's
 
 
 def test_a_w_curve_off_the_grid_is_refused_and_inferred_picks_warn(tmp_path):
@@ -127,3 +130,13 @@ def test_cancel_finds_a_sweep_as_query_does(shelf, tmp_path):
         assert "'tiny' names 2 sweeps" in proc.stderr and "pass the sweep id" in proc.stderr
     proc = ditherlab("cancel", "e2e-avg", store=root, check=True)
     assert proc.stdout.strip() == f"{_sweep_id(shelf, 'e2e-avg')}: done; nothing to cancel"
+
+
+def test_plan_record_into_a_file_is_refused_like_every_command(tmp_path):
+    (tmp_path / "afile").write_text("")
+    spec = tmp_path / "tiny.toml"
+    spec.write_text(TINY)
+    proc = ditherlab("plan", str(spec), "--record", store=tmp_path / "afile")
+    assert proc.returncode == 2 and proc.stdout == ""   # was a warning, exit 0
+    assert proc.stderr == (f"ditherlab: store path {tmp_path / 'afile'} is not a folder; pass "
+                           "--store DIR (or set $DITHERLAB_STORE) naming a folder\n")
