@@ -25,8 +25,9 @@ def figure_format(path) -> str:
         raise ValueError(f"cannot write {path}: the file name must end in "
                          f"{', '.join('.' + f for f in FORMATS)} (got {path.suffix or 'none'})")
     folder = path.parent
-    if folder.exists() and not folder.is_dir():
-        raise ValueError(f"cannot write {path}: {folder} is a file, not a folder")
+    above = next((a for a in (folder, *folder.parents) if a.exists()), None)
+    if above is not None and not above.is_dir():
+        raise ValueError(f"cannot write {path}: {above} is a file, not a folder")
     if not folder.is_dir():
         raise ValueError(f"cannot write {path}: the folder {folder} does not exist "
                          f"(create it first: mkdir -p {folder})")

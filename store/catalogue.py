@@ -230,8 +230,9 @@ class Catalogue(LeaseMixin):
 
     def matches(self, key: str) -> list[dict]:
         """Every sweep a user may mean by ``key``, newest first: the sweep of that exact
-        id, else every sweep of that name (or earlier name), else every sweep whose id
-        starts with ``key`` (cubes without a row are adopted first when nothing matches).
+        id, else every sweep of that name, else of that earlier name, else every sweep
+        whose id starts with ``key`` (cubes without a row are adopted first when nothing
+        matches).
         Deciding between several is the caller's (``sweeps.lookup``: only current ones)."""
         for attempt in range(2):
             rows = self._match(str(key))
@@ -253,8 +254,9 @@ class Catalogue(LeaseMixin):
     def _match(self, key: str) -> list[dict]:
         newest = " ORDER BY created DESC, sweep_id"
         return (self._query("SELECT * FROM sweeps WHERE sweep_id = ?", (key,))
-                or self._query("SELECT * FROM sweeps WHERE name = ? OR instr(char(10) || "
-                               "aliases, char(10) || ? || char(10))" + newest, (key, key))
+                or self._query("SELECT * FROM sweeps WHERE name = ?" + newest, (key,))
+                or self._query("SELECT * FROM sweeps WHERE instr(char(10) || aliases, "   # earlier
+                               "char(10) || ? || char(10))" + newest, (key,))
                 or self._query("SELECT * FROM sweeps WHERE substr(sweep_id, 1, ?) = ?" + newest,
                                (len(key), key)))
 

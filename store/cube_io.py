@@ -152,10 +152,10 @@ def _unreadable(path: Path, err: Exception) -> CubeError:
                      f"again{how} to republish it from the journal")
 
 
-def disagreement(path, ds) -> str | None:
+def disagreement(path, ds, ignore: tuple[str, ...] = ()) -> str | None:
     """``None`` if the published cube at ``path`` holds exactly ``ds`` (every variable
-    and coordinate, and ``ds``'s attributes but ``created``; attributes only the file has
-    are kept), else why not, in a few words."""
+    and coordinate, and ``ds``'s attributes but ``created`` and those in ``ignore``;
+    attributes only the file has are kept), else why not, in a few words."""
     try:
         pub = read_cube(path)
     except FileNotFoundError:
@@ -168,7 +168,7 @@ def disagreement(path, ds) -> str | None:
     for name, var in ds.variables.items():
         if not var.equals(pub.variables[name]):
             return f"the cube's {name} differs from the journal's"
-    keys = [k for k in ds.attrs if k != A.CREATED]
+    keys = [k for k in ds.attrs if k != A.CREATED and k not in ignore]
     attrs = [A.canonical_json(A.encode({k: d.attrs.get(k) for k in keys})) for d in (ds, pub)]
     if attrs[0] != attrs[1]:
         return "the cube's attributes differ from the journal's"

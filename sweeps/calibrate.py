@@ -66,8 +66,10 @@ def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:
         workers = 1  # the analysis paths run in the submitting process
     per_point = _time_block(plan, pts)
     n_tasks = len(plan.blocks)
-    workers = max(1, min(workers, n_tasks))   # a block is one worker's: fewer blocks, fewer busy
-    wall = plan.n_points * per_point / workers + n_tasks * TASK_OVERHEAD_S / workers
+    # a block is one worker's: ceil(blocks / workers) rounds of one block each (3 blocks on
+    # 2 workers take 2 rounds, 1 block on 2 workers takes 1)
+    rounds = -(-n_tasks // max(1, workers))
+    wall = rounds * (plan.n_points / max(n_tasks, 1) * per_point + TASK_OVERHEAD_S)
     return Estimate(level, plan.numerics.integrator, per_point, wall)
 
 

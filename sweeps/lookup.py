@@ -114,7 +114,11 @@ def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
     from store.layout import SPEC_NAME
 
     found = ds.attrs.get("sweep_id")
-    if found is not None and str(found) != sweep_id:
+    if found is not None and str(found) != sweep_id and \
+            not (cube.parent.parent / str(found)).exists():   # its folder renamed or moved
+        raise UserError(f"the folder {cube.parent} holds sweep {found} under another name; "
+                        f"`mv {cube.parent} {cube.parent.parent / str(found)}` puts it back")
+    if found is not None and str(found) != sweep_id:   # a cube copied from another sweep
         spec = cube.parent / SPEC_NAME
         how = f" (ditherlab submit {spec} --store {cube.parent.parent})" if spec.exists() else ""
         raise UserError(f"the cube at {cube} is sweep {found}'s, not {sweep_id}'s; submit the "

@@ -89,14 +89,16 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     _check_space(plan, sweep, cube, todo)
     sweep.root.mkdir(parents=True, exist_ok=True)
     sweep.write_spec(plan.spec.to_json())
-    earlier = [r["name"] for r in catalogue.matches(plan.sweep_id)
-               if r["sweep_id"] == plan.sweep_id]
+    try:
+        earlier = catalogue.get(plan.sweep_id)["name"]
+    except LookupError:   # a new sweep
+        earlier = plan.spec.name
     catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
                        len(plan.blocks), sweep.root, results_fingerprint())
-    renamed = bool(earlier) and earlier[0] != plan.spec.name
+    renamed = earlier != plan.spec.name
     if renamed:   # the same spec under another name (a name is not part of a sweep's id)
         log.warning("sweep %s is named %r now, %r before (the same spec under another name); "
-                    "both names find it", plan.sweep_id, plan.spec.name, earlier[0])
+                    "both names find it", plan.sweep_id, plan.spec.name, earlier)
     lease, attached = _take_lease(plan, catalogue, owner, stop, progress)
     if lease is None:
         return attached_result(plan, sweep, attached, t0)
@@ -182,9 +184,8 @@ def _republish(plan: Plan, sweep, cube, renamed: bool = False) -> None:
     """Publish ``cube`` (rebuilt from the journal), saying so when the published cube
     was missing, unreadable or different (a run killed before its last publish, a
     damaged file), but not for the new name alone of a renamed sweep (said already)."""
-    why = store.cube_io.disagreement(sweep.cube, cube) if sweep.cube.exists() else None
-    if renamed and why == "the cube's attributes differ from the journal's":
-        why = None
+    cosmetic = (store.attrs.NAME, store.attrs.SPEC) if renamed else ()   # the new name alone
+    why = store.cube_io.disagreement(sweep.cube, cube, cosmetic) if sweep.cube.exists() else None
     store.publish(cube, sweep.cube)
     if why:
         log.warning("sweep %s: %s; republished it from the journal", plan.sweep_id, why)

@@ -211,6 +211,13 @@ class Spec(_Strict):
     block_size: Annotated[int, Field(ge=1, le=MAX_AXIS_POINTS)] | None = None
     refine: bool | Refine = False
 
+    @field_validator("name")
+    @classmethod
+    def _name_one_line(cls, v):   # a name is typed on command lines, one catalogue line
+        if any(ord(c) < 32 or ord(c) == 127 for c in v):
+            raise ValueError(f"name must be one line of printable characters, got {show(v)}")
+        return v
+
     @field_validator("outputs")
     @classmethod
     def _outputs_unique(cls, v):

@@ -156,9 +156,11 @@ def main(argv: list[str] | None = None) -> int:
         except BrokenPipeError as exc:
             if not _stdout_closed():      # a pipe of the run's own (dask): a fault
                 return _fail_unexpected(exc)
-            # `ditherlab status | head`: the reader has what it wanted
+            # `ditherlab status | head`: the reader has what it wanted. A command that only
+            # prints (status, query, scenes, plan) succeeded, as when its output fitted the
+            # pipe before head closed it (pipefail-safe); a run cut short by it has not
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            return EXIT_FAILED
+            return 0 if args.command in ("status", "query", "scenes", "plan") else EXIT_FAILED
         except Exception as exc:  # noqa: BLE001 -- the one-line promise (README)
             return _fail_unexpected(exc)
 
@@ -175,7 +177,8 @@ def _stdout_closed() -> bool:
         poller = select.poll()
     except (AttributeError, OSError, ValueError):   # no poll (Windows) or no real stdout
         try:
-            sys.stdout.flush()
+            if sys.stdout is not None:   # None: started with stdout closed (>&-)
+                sys.stdout.flush()
         except BrokenPipeError:
             return True
         return False

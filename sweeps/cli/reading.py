@@ -24,14 +24,18 @@ def parse_sel(items: list[str] | None) -> dict[str, float]:
         axis = axis.strip()
         if not eq:
             raise RefusedError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
-        if axis in sel:
+        if axis in sel and sel[axis] != _number(axis, value):
             raise RefusedError(f"--sel {axis}: given twice ({sel[axis]:g} and {value.strip()}); "
                                f"a selection takes one value per axis")
-        try:
-            sel[axis] = float(value)
-        except ValueError:
-            raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
+        sel[axis] = _number(axis, value)
     return sel
+
+
+def _number(axis: str, value: str) -> float:
+    try:
+        return float(value)
+    except ValueError:
+        raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
 
 
 def _json_value(x):
@@ -74,6 +78,7 @@ def cmd_status(args) -> int:
         elif live == "queued":
             print(f"{'':>16}{queue_hint(cat, [row])}")
         if ds is not None:
+            check_cube_of(ds, sweep_id, cube)   # not another sweep's estimate and warnings
             _print_error_estimate(ds)
             _warn_accuracy(ds)
         return 0
@@ -238,12 +243,14 @@ def open_for_map(args):
 MAP_AXES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W")}   # a map's own plane
 
 
-def refuse_map_axes(args) -> None:
-    """``--sel`` of an axis the map is drawn over is refused, not drawn as a one-column map
-    (a stability cut labelled alone would also lose its PU link to W = 0)."""
+def refuse_map_axes(args, ds) -> None:
+    """``--sel`` of an axis the map is drawn over (with more than one value in ``ds``) is
+    refused, not drawn as a one-column map (a stability cut labelled alone would also lose
+    its PU link to W = 0)."""
     plane = MAP_AXES.get(args.kind, ())
     fixed = [s.partition("=")[0].strip() for s in args.sel or ()
              if s.partition("=")[0].strip() in plane]
+    fixed = [axis for axis in fixed if ds.sizes[axis] > 1]
     if fixed:
         raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {args.kind} map "
                            f"({' x '.join(plane)}), not a value to fix; `ditherlab query` "
@@ -253,9 +260,9 @@ def refuse_map_axes(args) -> None:
 def cmd_map(args) -> int:
     import store
 
-    refuse_map_axes(args)
     parse_sel(args.sel)   # a malformed selection is refused before the store is read
     ds = open_for_map(args)
+    refuse_map_axes(args, ds)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]
     try:

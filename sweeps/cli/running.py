@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from ..errors import EXIT_FAILED, Interrupted, UserError
-from ..lookup import resolve_sweep, store_root
+from ..lookup import catalogue, resolve_sweep, store_root
 
 
 def _load(args):
@@ -95,7 +95,10 @@ def cmd_cancel(args) -> int:
     from ..service import cancel
 
     root = store_root(args.store)
-    sweep_id, _ = resolve_sweep(root, args.sweep, need_cube=False)   # as query finds it
+    live = [r for r in catalogue(root).matches(args.sweep) if r["state"] in ("running", "queued")]
+    # the one sweep of that key still running or queued (stale or not), else as query finds it
+    sweep_id = live[0]["sweep_id"] if len(live) == 1 else \
+        resolve_sweep(root, args.sweep, need_cube=False)[0]
     try:
         row = cancel(root, sweep_id, wait=args.wait)
     except LookupError as exc:

@@ -96,13 +96,14 @@ def _map_picked(args) -> int:
 
     import store
 
-    from ..cli.reading import open_for_map, parse_sel, refuse_map_axes, warn_inferred
+    from ..cli.reading import cmd_map, open_for_map, parse_sel, warn_inferred
     from .scenes import shrink
 
-    if args.kind != "friction":
-        refuse_map_axes(args)   # --sel W of a stick-slip or stability map
+    if args.kind != "friction" and args.pick is not None:
         raise RefusedError(f"--pick applies to --kind friction only (curves of W), not to "
                            f"--kind {args.kind}")
+    if args.kind != "friction":   # --sel W of a stick-slip or stability map: as any --sel
+        return cmd_map(args)
     wanted = _w_list(args.sel)
     if args.pick is not None and wanted:
         raise RefusedError("give --pick N or --sel W=VALUE, not both")

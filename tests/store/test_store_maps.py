@@ -125,8 +125,9 @@ def test_an_output_path_that_cannot_be_a_figure_says_why(tmp_path):
     file's 'Is a directory' after the figure was drawn)."""
     (tmp_path / "afile").write_text("")
     (tmp_path / "d.png").mkdir()
-    with pytest.raises(ValueError, match=r"afile is a file, not a folder$"):
-        store.figure_format(tmp_path / "afile" / "x.png")
+    for under in ("x.png", "sub/x.png"):
+        with pytest.raises(ValueError, match=r"afile is a file, not a folder$"):
+            store.figure_format(tmp_path / "afile" / under)
     with pytest.raises(ValueError, match=r"d.png: it is a folder; name a file$"):
         store.figure_format(tmp_path / "d.png")
     with pytest.raises(ValueError, match=r"the folder .*nope does not exist \(create it first"):

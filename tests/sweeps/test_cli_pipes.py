@@ -8,10 +8,14 @@ from .conftest import BIN
 
 
 def test_a_reader_that_stops_early_gets_no_error_line():
-    proc = subprocess.run(f"'{BIN}' scenes | head -1", shell=True, capture_output=True,
-                          text=True, timeout=120)
-    assert proc.stdout.startswith("scene ") and proc.stdout.count("\n") == 1
-    assert proc.stderr == ""
+    """`scenes` writes more than head reads: the broken pipe is near certain (it was the
+    CI failure of stop 25, "ditherlab: Broken pipe"); exit 0 under pipefail either way."""
+    for _ in range(3):
+        proc = subprocess.run(f"set -o pipefail; '{BIN}' scenes | head -1", shell=True,
+                              executable="/bin/bash", capture_output=True, text=True,
+                              timeout=120)
+        assert proc.stdout.startswith("scene ") and proc.stdout.count("\n") == 1
+        assert proc.stderr == "" and proc.returncode == 0
 
 
 def test_a_broken_pipe_elsewhere_is_one_line(capsys, monkeypatch):
@@ -35,7 +39,7 @@ def test_a_broken_pipe_elsewhere_is_one_line(capsys, monkeypatch):
 
 def test_a_broken_pipe_elsewhere_is_one_line_with_stdout_an_open_pipe():
     """The same with a real, still-read standard output pipe: the kernel is asked whether
-    *our* reader has gone, and it has not."""
+    *our* reader has gone, and it has not (guards the poll against a false 'closed')."""
     code = ("import importlib, sys\n"
             "m = importlib.import_module('sweeps.cli.main')\n"
             "def broken(args): raise BrokenPipeError(32, 'Broken pipe (a dask comm)')\n"

@@ -53,8 +53,21 @@ def test_a_cube_copied_from_another_sweep_is_refused(shelf, tmp_path):
         f"ditherlab: the cube at {root / tiny / 'cube.nc'} is sweep {avg}'s, not {tiny}'s; "
         f"submit the spec again (ditherlab submit {root / tiny / 'spec.json'} --store {root}) "
         "to republish it from the journal"]
+    status = ditherlab("status", "tiny", store=root)   # its row, then the same refusal
+    assert status.returncode == 1 and status.stderr == proc.stderr
     ditherlab("submit", str(root / tiny / "spec.json"), "-q", store=root, check=True)
     assert "inf" in ditherlab("query", "tiny", store=root, check=True).stdout
+
+
+def test_a_sweep_folder_under_another_name_says_how_to_put_it_back(shelf, tmp_path):
+    root = tmp_path / "store"
+    shutil.copytree(shelf / "store", root)
+    tiny = _sweep_id(shelf, "tiny")
+    (root / tiny).rename(root / "archive")
+    proc = ditherlab("query", "archive", store=root)
+    assert proc.returncode == 1
+    assert proc.stderr == (f"ditherlab: the folder {root / 'archive'} holds sweep {tiny} under "
+                           f"another name; `mv {root / 'archive'} {root / tiny}` puts it back\n")
 
 
 def test_the_same_spec_under_a_second_name_keeps_the_first(shelf, tmp_path):
@@ -73,6 +86,12 @@ def test_the_same_spec_under_a_second_name_keeps_the_first(shelf, tmp_path):
     shown = ditherlab("status", "tiny", store=root, check=True).stdout
     assert "name: bob" in shown and "also_named: tiny" in shown
     assert f"path: {root / sid}" in shown   # the copied store's folder, not the original's
+    # an earlier name does not stand in the way of a sweep that has it now
+    (tmp_path / "new.toml").write_text(TINY.replace("v_ref = [0.5]", "v_ref = [0.6]"))
+    ditherlab("submit", str(tmp_path / "new.toml"), "-q", store=root, check=True)
+    now = ditherlab("query", "tiny", "--format", "csv", store=root, check=True).stdout
+    assert ",0.6," in now and ",0.5," not in now
+    assert ",0.5," in ditherlab("query", "bob", "--format", "csv", store=root, check=True).stdout
 
 
 def test_a_w_curve_off_the_grid_is_refused_and_inferred_picks_warn(tmp_path):
@@ -140,3 +159,17 @@ def test_plan_record_into_a_file_is_refused_like_every_command(tmp_path):
     assert proc.returncode == 2 and proc.stdout == ""   # was a warning, exit 0
     assert proc.stderr == (f"ditherlab: store path {tmp_path / 'afile'} is not a folder; pass "
                            "--store DIR (or set $DITHERLAB_STORE) naming a folder\n")
+
+
+@pytest.mark.parametrize("kind, sel, axis", [("stick-slip", "W=0.5", "W"),
+                                             ("stability", "v_ref=0.5", "v_ref"),
+                                             ("stability", "W=0.5", "W")])
+def test_a_map_refuses_to_fix_its_own_axis_unless_it_has_one_value(shelf, tmp_path, kind, sel,
+                                                                   axis):
+    proc = ditherlab("map", "e2e-avg", "--kind", kind, "--sel", sel, "-o",
+                     str(tmp_path / "m.png"), store=shelf / "store")
+    assert proc.returncode == 2 and proc.stderr.startswith(
+        f"ditherlab: --sel {axis}: {axis} is an axis of the {kind} map"), proc.stderr
+    ditherlab("map", "tiny", "--kind", "stability", "--sel", "v_ref=0.5", "--sel", "v_d=0.1",
+              "--sel", "v_d=0.1", "-o", str(tmp_path / "m.png"), store=shelf / "store",
+              check=True)   # tiny has one v_ref; a value repeated is not a second value

@@ -17,6 +17,7 @@ def refused(data, **kw) -> list[str]:
 
 @pytest.mark.parametrize("data, field, hint", [
     ({"colour": "red"}, "colour", "unknown key"),
+    ({"name": "a\nb"}, "name", "one line of printable characters"),
     ({"params": {"sigma0": -1.0}}, "params.sigma0", "greater than 0"),
     ({"params": {"sigma0": "stiff"}}, "params.sigma0", "valid number"),
     ({"grid": {"W": []}}, "grid.W", "at least one value"),
