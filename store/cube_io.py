@@ -145,11 +145,15 @@ def _existing(path) -> Path:
 
 
 def _unreadable(path: Path, err: Exception) -> CubeError:
-    spec = path.parent / SPEC_NAME
-    how = f" (ditherlab submit {spec} --store {path.parent.parent})" if spec.exists() else ""
     text = f"{type(err).__name__}: {err}".replace("\n", " ")
-    return CubeError(f"the cube at {path} is unreadable ({text[:160]}); submit the spec "
-                     f"again{how} to republish it from the journal")
+    return CubeError(f"the cube at {path} is unreadable ({text[:160]}); {republish_hint(path)}")
+
+
+def republish_hint(path: Path) -> str:
+    """How to rebuild the cube at ``path`` from its sweep's journal, in a few words."""
+    spec = Path(path).parent / SPEC_NAME
+    how = f" (ditherlab submit {spec} --store {spec.parent.parent})" if spec.exists() else ""
+    return f"submit the spec again{how} to republish it from the journal"
 
 
 def disagreement(path, ds, ignore: tuple[str, ...] = ()) -> str | None:

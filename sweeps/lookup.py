@@ -111,18 +111,17 @@ def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
 def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
     """Refuse to serve a cube that another sweep wrote (a file copied or moved between
     sweep folders): its numbers would be served as this sweep's, with status ok."""
-    from store.layout import SPEC_NAME
+    from store.cube_io import republish_hint
 
     found = ds.attrs.get("sweep_id")
-    if found is not None and str(found) != sweep_id and \
-            not (cube.parent.parent / str(found)).exists():   # its folder renamed or moved
+    if found is None or str(found) == sweep_id:
+        return
+    home = cube.parent.parent / str(found)
+    if not home.exists():   # the sweep's own folder, renamed or moved
         raise UserError(f"the folder {cube.parent} holds sweep {found} under another name; "
-                        f"`mv {cube.parent} {cube.parent.parent / str(found)}` puts it back")
-    if found is not None and str(found) != sweep_id:   # a cube copied from another sweep
-        spec = cube.parent / SPEC_NAME
-        how = f" (ditherlab submit {spec} --store {cube.parent.parent})" if spec.exists() else ""
-        raise UserError(f"the cube at {cube} is sweep {found}'s, not {sweep_id}'s; submit the "
-                        f"spec again{how} to republish it from the journal")
+                        f"`mv {cube.parent} {home}` puts it back")
+    raise UserError(f"the cube at {cube} is sweep {found}'s, not {sweep_id}'s; "
+                    f"{republish_hint(cube)}")
 
 
 def inferred_note(provenance) -> str | None:

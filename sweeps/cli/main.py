@@ -40,7 +40,7 @@ class _OneLineParser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     ap = _OneLineParser(prog="ditherlab", description="Parameter sweeps of friction "
-                                 "dynamics under dither: submit, inspect, query, draw.")
+                        "dynamics under dither: submit, inspect, query, draw.")
     ap.add_argument("--version", action="version", version=f"ditherlab {_version()}")
     common = _OneLineParser(add_help=False)
     common.add_argument("--store", help="store folder (default $DITHERLAB_STORE or "

@@ -24,10 +24,11 @@ def parse_sel(items: list[str] | None) -> dict[str, float]:
         axis = axis.strip()
         if not eq:
             raise RefusedError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
-        if axis in sel and sel[axis] != _number(axis, value):
+        x = _number(axis, value)
+        if axis in sel and sel[axis] != x:
             raise RefusedError(f"--sel {axis}: given twice ({sel[axis]:g} and {value.strip()}); "
                                f"a selection takes one value per axis")
-        sel[axis] = _number(axis, value)
+        sel[axis] = x
     return sel
 
 
@@ -243,16 +244,14 @@ def open_for_map(args):
 MAP_AXES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W")}   # a map's own plane
 
 
-def refuse_map_axes(args, ds) -> None:
+def _refuse_map_axes(kind: str, sel: dict, ds) -> None:
     """``--sel`` of an axis the map is drawn over (with more than one value in ``ds``) is
     refused, not drawn as a one-column map (a stability cut labelled alone would also lose
     its PU link to W = 0)."""
-    plane = MAP_AXES.get(args.kind, ())
-    fixed = [s.partition("=")[0].strip() for s in args.sel or ()
-             if s.partition("=")[0].strip() in plane]
-    fixed = [axis for axis in fixed if ds.sizes[axis] > 1]
+    plane = MAP_AXES.get(kind, ())
+    fixed = [axis for axis in sel if axis in plane and ds.sizes[axis] > 1]
     if fixed:
-        raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {args.kind} map "
+        raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {kind} map "
                            f"({' x '.join(plane)}), not a value to fix; `ditherlab query` "
                            f"reads a cut through it")
 
@@ -260,13 +259,13 @@ def refuse_map_axes(args, ds) -> None:
 def cmd_map(args) -> int:
     import store
 
-    parse_sel(args.sel)   # a malformed selection is refused before the store is read
+    sel = parse_sel(args.sel)   # a malformed selection is refused before the store is read
     ds = open_for_map(args)
-    refuse_map_axes(args, ds)
+    _refuse_map_axes(args.kind, sel, ds)
     draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
             "friction": store.friction_curves}[args.kind]
     try:
-        draw(ds, args.output, sel=parse_sel(args.sel))
+        draw(ds, args.output, sel=sel)
         if args.kind == "friction":   # curves of values, not a map of classes
             warn_inferred(ds, args.sel)
     except ValueError as exc:
