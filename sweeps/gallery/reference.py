@@ -92,3 +92,33 @@ def contact_asymptote(v_m=1e-3, v_a=1e-3, n=4096, **over):
     F = Y + sigma1(u, p) * (u - np.abs(u) * Y / gu) + p["sigma2"] * u
     amps = 2 * np.abs(np.fft.rfft(F)) / n
     return Y, F, amps[1:6]
+
+
+def averaged_rhs(x, v_ref, W, p):
+    """Right-hand side of the averaged tracking system, Eqs. 6.4-6.6 (square wave; W = 0:
+    Eqs. 6.1-6.3 without dither), state ``x = (Z, e, v)``; Eq. 6.6's second bracket with
+    sigma1(v - W) (the paper prints v + W)."""
+    Z, e, v = x
+    us = (v + W, v - W) if W else (v,)
+    rates = [u - p["sigma0"] * abs(u) * Z / g(u, p) for u in us]
+    damping = np.mean([sigma1(u, p) * r for u, r in zip(us, rates)])
+    F = p["sigma0"] * Z + damping + p["sigma2"] * v
+    return np.array([np.mean(rates), v_ref - v, e - F])
+
+
+def averaged_max_eig(v_ref, W, vd, **over) -> float:
+    """Largest real part of the eigenvalues of the averaged system's Jacobian at its
+    equilibrium (v = v_ref, Z from <dZ/dt> = 0, e = <F>): central differences (step 1e-7,
+    relative) and ``numpy.linalg.eigvals``; good to ~1e-6, so signs are judged only where
+    ``|max eig| > 1e-4``."""
+    p = {"sigma0": 100.0, **SEC5, "vd": vd, **over}
+    us = (v_ref + W, v_ref - W) if W else (v_ref,)
+    Z = v_ref / (p["sigma0"] * np.mean([abs(u) / g(u, p) for u in us]))
+    x0 = np.array([Z, 0.0, v_ref])
+    x0[1] = averaged_rhs(x0, v_ref, W, p)[2] * -1.0 + 0.0   # e such that dv/dt = 0: e = F
+    J = np.empty((3, 3))
+    for k in range(3):
+        h = np.zeros(3)
+        h[k] = 1e-7 * max(1.0, abs(x0[k]))
+        J[:, k] = (averaged_rhs(x0 + h, v_ref, W, p) - averaged_rhs(x0 - h, v_ref, W, p)) / (2 * h[k])
+    return float(np.linalg.eigvals(J).real.max())
