@@ -66,9 +66,9 @@ def run(*, friction: str = "elastoplastic", dither: str = "sine-velocity", W: fl
         dither = "none"
     if dt is None:
         dt = 2 * np.pi / omega / 16 if dither != "none" else 0.01
-    p = P.pack(W=W, omega=omega if dither != "none" else 0.0, v_ref=v_ref, slow_a=slow[0],
-               slow_omega=slow[1], vd=vd, lam=lam, t_end=t_end, t_transient=t_transient,
-               **over)
+    p = P.pack(**{"W": W, "omega": omega if dither != "none" else 0.0, "v_ref": v_ref,
+                  "slow_a": slow[0], "slow_omega": slow[1], "vd": vd, "lam": lam,
+                  "t_end": t_end, "t_transient": t_transient, **over})
     outputs = EP_OUTPUTS if friction == "elastoplastic" else LUGRE_OUTPUTS
     scene = Scene.from_params(p, friction=friction, dither=dither, integrator="dopri5",
                               outputs=outputs)
