@@ -130,11 +130,16 @@ def _map_picked(args) -> int:
 
 
 def cmd_scenes(args) -> int:
+    from .build import RECIPES
+
     print(f"{'scene':<15}{'small':>8}{'full':>8}  paper")
     for s in REGISTRY.values():
         print(f"{s.name:<15}{s.n_points('small'):>8}{s.n_points('full'):>8}  {s.ref}")
-    print("\nrun one: ditherlab submit --scene NAME [--size small|full]; "
-          "all figures: ditherlab gallery")
+    print("\nrun one: ditherlab submit --scene NAME [--size small|full]\n")
+    print(f"{'figure':<15}how it is computed (ditherlab gallery --only FIGURE)")
+    for key, recipe in RECIPES.items():
+        print(f"{key:<15}{recipe}")
+    print("\nall figures: ditherlab gallery [--size small|full] [-o DIR]")
     return 0
 
 

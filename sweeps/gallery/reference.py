@@ -6,12 +6,13 @@ friction law cannot pass both the engine and the reference.
 * :func:`effective_friction`: ``<F>(v)`` of the averaged LuGre slider, Eqs. 5.9-5.10
   (``Y = v / A``, ``<F> = Y (1 - C) + B + sigma2 v`` with ``A = <|u|/g>``, ``B = <sigma1(u) u>``,
   ``C = <sigma1(u) |u|/g>`` over ``u = v + W s(theta)``); ``model="no-damping"`` is Eq. 5.12
-  (``<F> = Y + sigma2 v``), ``g = "coulomb"`` the simplified model of Sec. 5.2 (``g = fc``,
+  (``<F> = Y + sigma2 v``), ``law="coulomb"`` the simplified model of Sec. 5.2 (``g = fc``,
   Eq. 5.20's model). The square wave is its two-point average; a sine is averaged over
   ``theta`` in ``[0, 2 pi]`` split at the zero crossings of ``u`` into two smooth pieces,
   each by Gauss-Legendre with :data:`GAUSS_NODES` nodes (numpy's ``leggauss``), vectorised
-  over ``v``. Convergence: 128 against 256 nodes differ by < 1e-12 on Figs. 6-8's curves
-  (tests/gallery/test_reference.py); against scipy's adaptive ``quad`` by < 1e-12.
+  over ``v``. Convergence: 256 against 1024 nodes differ by < 1e-13 on Figs. 6-8's curves
+  (128 nodes: 1e-11 where u touches 0, |v| = W, vd = 0.01;
+  tests/gallery/test_reference.py); against scipy's adaptive ``quad`` by < 1e-12.
 * :func:`contact_asymptote`: the ``omega -> infinity`` friction of the Sec. 3 contact model.
 """
 from __future__ import annotations
@@ -24,7 +25,7 @@ SEC5 = {"sigma1": 10.0, "sigma2": 0.004, "vs": 0.1, "fc": 1.0, "fs": 1.5, "delta
 #: Fig. 2's caption (SI units); Sec. 3: "delta = 1 in Eq. (2.4)"
 SEC3 = {"sigma0": 1e5, "sigma1": 1e3, "sigma2": 0.0, "fs": 1.5, "fc": 1.0, "vs": 1e-3,
         "vd": 1e-3, "delta": 1.0, "delta_d": 2.0}
-GAUSS_NODES = 128
+GAUSS_NODES = 256
 
 
 def g(u, p):
@@ -122,10 +123,11 @@ def averaged_max_eig(v_ref, W, vd, **over) -> float:
     us = (v_ref + W, v_ref - W) if W else (v_ref,)
     Z = v_ref / (p["sigma0"] * np.mean([abs(u) / g(u, p) for u in us]))
     x0 = np.array([Z, 0.0, v_ref])
-    x0[1] = averaged_rhs(x0, v_ref, W, p)[2] * -1.0 + 0.0   # e such that dv/dt = 0: e = F
+    x0[1] = -averaged_rhs(x0, v_ref, W, p)[2]     # e such that dv/dt = 0 (e = <F>)
     J = np.empty((3, 3))
     for k in range(3):
         h = np.zeros(3)
         h[k] = 1e-7 * max(1.0, abs(x0[k]))
-        J[:, k] = (averaged_rhs(x0 + h, v_ref, W, p) - averaged_rhs(x0 - h, v_ref, W, p)) / (2 * h[k])
+        J[:, k] = ((averaged_rhs(x0 + h, v_ref, W, p) - averaged_rhs(x0 - h, v_ref, W, p))
+                   / (2 * h[k]))
     return float(np.linalg.eigvals(J).real.max())
