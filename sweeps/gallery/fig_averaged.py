@@ -60,7 +60,7 @@ def _fig05_checks(ctx):
                                 for a, b, w, d in zs) or "none"
     checks = [
         below("(check of the engine) the averaged curves are the independent reference's "
-              "(Eqs. 5.9-5.10 by scipy, sweeps/gallery/reference.py)", "max |<F> - <F>_ref| "
+              "(Eqs. 5.9-5.10 written out again, sweeps/gallery/reference.py)", "max |<F> - <F>_ref| "
               "over 57 v x 3 W x 2 vd", ref, 1e-6, decisive=True,
               convention="1e-6: both are exact to ~1e-9"),
         below("low-velocity slope = (fc + W sigma2)/W (Eq. 5.13), vd = 0.01, every W drawn",
@@ -179,12 +179,12 @@ def fig07(ctx) -> FigureResult:
     dev = max(abs(s / e - 1) for s, e in zip(slopes, eq521))
     checks = [
         below("(check of the engine) Eq. 5.20 as drawn is the simplified model (g = fc, no "
-              "bristle damping) averaged independently (scipy, sweeps/gallery/reference.py)",
+              "bristle damping) averaged independently (sweeps/gallery/reference.py)",
               "max |<F>_5.20 - <F>_ref|", max(eq520_gap), 1e-8, decisive=True,
               convention="both exact to ~1e-10"),
         below("(check of the engine) the averaged full LuGre model is the independent "
               "reference's", "max |<F> - <F>_ref|, vd = 0.01", max(ref_gap), 1e-6,
-              decisive=True, convention="1e-6: the engine's Gauss-Legendre against scipy quad"),
+              decisive=True, convention="1e-6: both converged to ~1e-9"),
         below("near zero velocity <F> is approximately linear viscous damping, Eq. 5.21 "
               "(averaged full model, |v| <= 0.1 a Omega)", "largest deviation from the "
               "Eq. 5.21 line, relative to its end value", max(lin_dev), SLOPE_TOL,
