@@ -9,7 +9,8 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 # the modules that turn a spec into what the engine runs (levels, tolerances, scene, grid):
 # a change there changes results as surely as an engine edit
-PLANNING = ("accuracy.py", "plan.py", "grid.py", "outputs.py", "refine.py", "run_refined.py")
+PLANNING = ("spec/accuracy.py", "spec/grid.py", "spec/methods.py", "planning/plan.py",
+            "planning/refine.py", "planning/lattice.py", "run/refined.py")
 
 
 def results_fingerprint() -> str:
