@@ -31,7 +31,8 @@ except PackageNotFoundError:  # running from a source tree that was never instal
 
 # where computing starts: planning a spec, a worker's block, the runner that journals
 # blocks and publishes the cube, and the refinement that chooses a refined map's points
-ENTRY_MODULES = ("sweeps.plan", "sweeps.task", "sweeps.run", "sweeps.run_refined")
+ENTRY_MODULES = ("sweeps.planning.plan", "sweeps.workers.task", "sweeps.run.submit",
+                 "sweeps.run.refined")
 PACKAGES = ("engine", "sweeps", "store")        # ours: the only imports followed
 ROOT = Path(__file__).resolve().parent.parent   # the folder holding the three packages
 

@@ -101,7 +101,7 @@ def test_every_module_on_the_computing_path_is_in_the_results_fingerprint(tmp_pa
     before = fingerprint_of_copy(root)
     assert before == version.results_fingerprint()
     path = version.computing_path(root)
-    import sweeps.lattice as lattice
+    import sweeps.planning.lattice as lattice
     assert lattice.__name__ in path and set(version.ENTRY_MODULES) <= set(path)
     for name, file in sorted(path.items()):
         original = file.read_bytes()
@@ -130,7 +130,7 @@ def test_a_module_off_the_computing_path_leaves_the_fingerprint(tmp_path):
 # must be on the computing path.
 LOADED_BY_A_RUN = """
 import json, sys, warnings
-import sweeps.api, sweeps.lookup, sweeps.spec
+import sweeps.api, sweeps.lookup, sweeps.spec.load
 from sweeps.spec import parse_spec
 chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
                     "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
@@ -142,8 +142,8 @@ before = set(sys.modules)
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
     sweeps.api.run_sweep(chart, store={store!r}, progress=False)
-    from sweeps.plan import make_plan
-    from sweeps import task
+    from sweeps.planning.plan import make_plan
+    from sweeps.workers import task
     plan = make_plan(sim)
     out = task.compute_block(plan.scene, plan.block_points(0), plan.params,
                              plan.numerics.settings)
@@ -163,7 +163,7 @@ def test_the_computing_path_holds_every_module_a_run_loads(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     ours = {m for m in json.loads(proc.stdout.splitlines()[-1])
             if m.split(".")[0] in version.PACKAGES}
-    assert {"sweeps.run", "sweeps.task", "engine.batch", "store.journal"} <= ours, ours
+    assert {"sweeps.run.submit", "sweeps.workers.task", "engine.batch", "store.journal"} <= ours, ours
     missing = sorted(ours - set(version.computing_path()))
     assert not missing, f"loaded by a run but not in the results fingerprint: {missing}"
 
