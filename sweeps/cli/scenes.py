@@ -130,7 +130,7 @@ def _map_picked(args) -> int:
 
 
 def cmd_scenes(args) -> int:
-    from .build import RECIPES
+    from ..gallery.build import RECIPES
 
     print(f"{'scene':<15}{'small':>8}{'full':>8}  paper")
     for s in REGISTRY.values():
