@@ -39,11 +39,6 @@ SAMPLE_SIZE = 12
 # a relative change is measured against max(|value|, REL_FLOOR * the sample's largest |value|)
 # (a quenched v_slow_p2p of 1e-7 has no meaningful relative error)
 REL_FLOOR = 1e-3
-# F_mean relative to max(|F_mean|, F_MEAN_FLOOR fc): under a zero-mean slow force the mean
-# friction is a near-cancellation (0.018-0.16 fc on specs/demo-stick-slip.toml), where a
-# relative error says little; draft's change there was 1.4e-2 relative, i.e. ~3e-4 fc
-# (scripts/promise_check.py, docs/ACCURACY.md 5.2)
-F_MEAN_FLOOR = 0.1
 
 
 def finer_numerics(plan: Plan) -> Numerics:
@@ -115,8 +110,6 @@ def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dic
             floor = REL_FLOOR * float(np.nanmax(np.abs(fine))) if np.isfinite(fine).any() else 0
             if name == "max_stick":   # a run matters against the long-stick threshold
                 floor = max(floor, float(plan.params[P.LONG_STICK]))
-            if name == "F_mean":      # a signed mean of a force that swings over +-fc:
-                floor = max(floor, F_MEAN_FLOOR * float(plan.params[P.FC]))   # see below
             err = diff / np.maximum(np.maximum(np.abs(fine), floor), 1e-300)
         worst = float(np.nanmax(err)) if np.isfinite(err).any() else float("inf")
         if np.isnan(coarse).any() != np.isnan(fine).any():

@@ -102,8 +102,7 @@ LAW_PROMISE_OVERRIDES = {
 
 def promise(level: str, output: str, friction: str | None = None) -> float:
     """The error ``level`` promises for ``output`` (absolute for fractions; relative
-    otherwise, ``max_stick`` relative to ``max(value, long_stick)``, ``F_mean`` to
-    ``max(|value|, 0.1 fc)``: sweeps.estimate.F_MEAN_FLOOR) under ``friction``."""
+    otherwise, ``max_stick`` relative to ``max(value, long_stick)``) under ``friction``."""
     law = LAW_PROMISE_OVERRIDES.get(friction or "", {}).get(output, {})
     return law.get(level, PROMISE_OVERRIDES.get(output, {}).get(level, TARGET_ERROR[level]))
 
