@@ -90,16 +90,6 @@ harmonic balance of the contact system of Fig. 1."""),
 )
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
 def load() -> str:
     one, five, _ = os.getloadavg()
     return f"{one:.1f} (1 min), {five:.1f} (5 min)"
@@ -132,6 +122,9 @@ def section(bench: Bench, command: str, output: str, seconds: float, before: str
 def header(args, started: datetime.datetime, load_start: str, load_end: str) -> str:
     import numba
     import numpy
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    from bench_maps import cpu_model   # /proc/cpuinfo's model name
 
     made_by = ".venv/bin/python scripts/performance_page.py" + (" --quick" if args.quick else "")
     subset = ("\n**This is the `--quick` subset** (small options, fewer tables): run the "
