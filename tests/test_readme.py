@@ -7,7 +7,8 @@
 - Every relative link resolves to a file, and a ``#fragment`` to a heading of it; every page
   under docs/ is reachable from the README. Pages that other branches are writing
   (:data:`COMING`) may be linked before they exist.
-- Every test and script a page names (``tests/...py::test_x``, ``scripts/x.py``) exists.
+- Every source file a page names (``tests/...py::test_x``, ``scripts/x.py``, ``sweeps/...py``)
+  exists, and so does every test named after it.
 """
 from __future__ import annotations
 
@@ -27,6 +28,7 @@ COMING = {"docs/BATCH.md", "docs/WEB.md"}   # written on other branches; linked 
 FENCE = re.compile(r"^( *)<!-- runnable( slow)? -->\n\1```(bash|python|toml)\n(.*?)^\1```",
                    re.DOTALL | re.MULTILINE)
 LINK = re.compile(r"\]\(([^)\s]+)\)")
+SOURCE = re.compile(r"(?<![\w/.])((?:tests|scripts|engine|sweeps|store)/[\w/]+\.py)|::(\w+)")
 
 
 def runnable_blocks() -> list:
@@ -122,12 +124,13 @@ def test_every_docs_page_is_reachable_from_the_readme():
     assert COMING <= {dest for dest, _ in links(ROOT / "README.md")}
 
 
-def test_named_tests_and_scripts_exist():
-    """``tests/a.py::test_x`` and a following bare ``::test_y`` (same file) are defined."""
+def test_named_files_and_tests_exist():
+    """``tests/a.py::test_x`` and a following bare ``::test_y`` (same file) are defined; a
+    module named by its path (``engine/jit.py``) is where the page says."""
     bad = []
     for page in PAGES:
         current = None
-        for m in re.finditer(r"((?:tests|scripts)/[\w/]+\.py)|::(\w+)", page.read_text()):
+        for m in re.finditer(SOURCE, page.read_text()):
             if m.group(1):
                 current = m.group(1)
                 if not (ROOT / current).exists():
