@@ -13,6 +13,8 @@ from engine import status as S
 
 from .lease import LEASE_LOST
 from .plan import Plan
+from .task import META
+from .version import results_fingerprint
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running ...
 PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time on it: the
@@ -20,7 +22,6 @@ PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time o
                           # cube takes 0.35 s to write: every ~12 s, not every 5 s)
 
 log = logging.getLogger("ditherlab")
-
 
 
 class BlockSink:
@@ -36,15 +37,24 @@ class BlockSink:
         self.last_publish, self.publish_s = time.monotonic(), 0.0
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
+        self.fingerprint = results_fingerprint()     # what every journaled block must carry
+        self.foreign_blocks = 0                      # blocks refused for another engine
         self.stopped: str | None = None              # sweeps.lease.CANCELLED / SHUTDOWN / ...
         self._report(force=True)
 
     def __call__(self, b: int, result: dict) -> None:
+        engine = result.get("fingerprint")
+        if engine != self.fingerprint:   # the last line of defence (sweeps.matching)
+            self.foreign_blocks += 1
+            log.warning("block %d came back from another engine (results fingerprint %s, "
+                        "this sweep's %s): not journaled; its points stay to compute",
+                        b, engine, self.fingerprint)
+            return
         if "error" in result:
             log.warning("block %d failed: %s", b, result["error"])
         payload = {"index": self.plan.blocks[b],
-                   **{k: v for k, v in result.items() if k != "error"}}
-        self.journal.write(b, payload)
+                   **{k: v for k, v in result.items() if k not in META}}
+        self.journal.write(b, payload, engine=engine)
         store.fill_block(self.cube, payload)
         self.done.add(b)
         self.blocks_run += 1

@@ -18,6 +18,7 @@ from engine import params as P
 from engine import status as S
 
 COUNTERS = ("status", "cost_s", "steps", "evals")
+META = ("error", "fingerprint")   # keys of a block's result that are not per-point arrays
 
 log = logging.getLogger("ditherlab")
 
@@ -26,6 +27,8 @@ BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed blo
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
+    The result carries ``fingerprint``: the results fingerprint of the process that
+    computed it (the submitter journals a block only under its own: sweeps.sink).
 
     With ``$DITHERLAB_BLOCK_LOG`` set (inherited by local dask workers), appends one line
     per call to that file: pid and :func:`block_key` (how the tests count block
@@ -43,9 +46,23 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
         return {**{name: nan for name in scene.outputs},
                 "status": np.full(n, S.FAILED, np.int8), "cost_s": np.zeros(n),
                 "steps": np.zeros(n, np.int64), "evals": np.zeros(n, np.int64),
-                "error": f"{type(exc).__name__}: {exc}"}
+                "error": f"{type(exc).__name__}: {exc}", "fingerprint": _fingerprint()}
     return {**res.outputs, "status": res.status, "cost_s": res.cost_s,
-            "steps": res.steps, "evals": res.evals}
+            "steps": res.steps, "evals": res.evals, "fingerprint": _fingerprint()}
+
+
+def identity() -> dict:
+    """What a worker runs: its results fingerprint and ditherlab version, computed from
+    the modules this process imports (run on each worker as it joins: sweeps.matching)."""
+    from .version import __version__
+
+    return {"fingerprint": _fingerprint(), "version": __version__}
+
+
+def _fingerprint() -> str:
+    from .version import results_fingerprint
+
+    return results_fingerprint()
 
 
 def block_key(scene, points: np.ndarray, settings) -> str:

@@ -1,9 +1,10 @@
 """The ``ditherlab`` command line (DESIGN.md §5): the parser, and the promise that every
 fault ends in one line.
 
-    ditherlab submit SPEC.toml [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
-                               [--detach]
-    ditherlab serve [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
+    ditherlab submit SPEC.toml [--store DIR] [--scheduler ADDR | --workers N
+                               | --cluster slurm|pbs|sge [--jobs N]] [--dashboard ADDR] [--detach]
+    ditherlab serve [--store DIR] [--scheduler ADDR | --workers N | --cluster KIND [--jobs N]]
+                    [--dashboard ADDR]
     ditherlab status [SWEEP]
     ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
@@ -108,6 +109,12 @@ def _cluster_options(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
     where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+                       help="workers as batch jobs through dask-jobqueue, configured the dask "
+                       "way (jobqueue.KIND.* : docs/BATCH.md)")
+    p.add_argument("--jobs", type=int, default=4, metavar="N",
+                   help="with --cluster: at most N batch jobs, one single-threaded worker each "
+                   "(never more than blocks to compute; default 4)")
     p.add_argument("--dashboard", metavar="ADDR",
                    help="start the local cluster's dask dashboard at ADDR (e.g. :8787; needs "
                    "bokeh) and print its link; default: no dashboard")
@@ -140,9 +147,10 @@ def main(argv: list[str] | None = None) -> int:
     README (0 ok, 1 failed, 2 refused, 130 interrupted), never a traceback
     (``DITHERLAB_DEBUG=1`` shows the traceback of an unexpected error)."""
     args = build_parser().parse_args(argv)
-    if getattr(args, "workers", 1) is not None and getattr(args, "workers", 1) < 1:
-        print("ditherlab: --workers must be >= 1", file=sys.stderr)
-        return EXIT_REFUSED
+    for option in ("workers", "jobs"):
+        if getattr(args, option, 1) is not None and getattr(args, option, 1) < 1:
+            print(f"ditherlab: --{option} must be >= 1", file=sys.stderr)
+            return EXIT_REFUSED
     verbosity = -1 if getattr(args, "quiet", False) else int(getattr(args, "verbose", False))
     with _one_line_warnings(verbosity):
         try:

@@ -31,7 +31,7 @@ def cmd_submit(args) -> int:
     if args.detach:
         return _submit_detached(plan, root)
     try:
-        res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
+        res = submit(plan, root, scheduler=args.scheduler, workers=_workers(args),
                      progress=not args.quiet, dashboard=args.dashboard)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; {_kept(plan, root)}; "
@@ -85,8 +85,17 @@ def _submit_detached(plan, root: Path) -> int:
 def cmd_serve(args) -> int:
     from ..service import serve
 
-    return serve(store_root(args.store), scheduler=args.scheduler, workers=args.workers,
+    return serve(store_root(args.store), scheduler=args.scheduler, workers=_workers(args),
                  progress=False, dashboard=args.dashboard)
+
+
+def _workers(args):
+    """``--workers N`` local processes, or ``--cluster KIND --jobs N`` batch jobs."""
+    if not args.cluster:
+        return args.workers
+    from ..batch import BatchWorkers
+
+    return BatchWorkers(args.cluster, args.jobs)
 
 
 def cmd_cancel(args) -> int:
