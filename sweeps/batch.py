@@ -6,7 +6,8 @@ or ``DASK_JOBQUEUE__<KIND>__<KEY>`` in the environment. ditherlab sets only what
 
 - one thread per worker (``processes = cores``: the kernels are single-threaded);
 - ``DITHERLAB_CACHE_DIR`` in the job script (before the site's prologue, which may
-  override it), so that jobs share the submitter's kernel cache folder;
+  override it), so that jobs share the submitter's kernel cache folder, and
+  ``PYTHONSAFEPATH=1`` (the job's folder is not put first on ``sys.path``);
 - no dashboard unless asked (``--dashboard``): the scheduler's HTTP server on loopback,
   ``--no-dashboard`` for the workers;
 - the loopback interface (``lo``) unless an interface or scheduler host is configured:
@@ -22,6 +23,9 @@ from __future__ import annotations
 import logging
 import os
 import shlex
+import signal
+import sys
+import threading
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -41,6 +45,11 @@ class BatchWorkers:
     unless the site's ``cores`` per job is larger)."""
     kind: str
     jobs: int = 4
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise RefusedError(f"--cluster {self.kind}: choose one of {', '.join(KINDS)}")
+        jobqueue()   # refused now if missing; imported on the main thread (see there)
 
     def for_blocks(self, n_blocks: int) -> BatchWorkers:
         """No more jobs than blocks to compute."""
@@ -73,26 +82,41 @@ def job_options(kind: str, dashboard: str | None = None) -> dict:
         extra.append("--no-dashboard")
     options["worker_extra_args"] = extra
     cache = os.environ.get("DITHERLAB_CACHE_DIR") or Path.home() / ".cache" / "ditherlab"
+    # PYTHONSAFEPATH: a job starts in the submitter's folder, and `python -m` would put it
+    # first on sys.path, where a store named `store` hides the package (Python >= 3.11)
     options["job_script_prologue"] = [f"export DITHERLAB_CACHE_DIR={shlex.quote(str(cache))}",
+                                      "export PYTHONSAFEPATH=1",
                                       *(cfg("job-script-prologue") or [])]
     return options
 
 
 def make_cluster(kind: str, dashboard: str | None = None):
     """A dask-jobqueue cluster of ``kind`` (no job submitted yet)."""
-    if kind not in KINDS:
-        raise RefusedError(f"--cluster {kind}: choose one of {', '.join(KINDS)}")
-    try:
-        import dask_jobqueue
-    except ImportError:
-        raise RefusedError("--cluster needs dask-jobqueue: pip install 'ditherlab[hpc]'") \
-            from None
-    cluster = getattr(dask_jobqueue, KINDS[kind])(**job_options(kind, dashboard))
+    cluster = getattr(jobqueue(), KINDS[kind])(**job_options(kind, dashboard))
     address = cluster.scheduler_address
     if "127.0.0.1" in address or "localhost" in address:
         log.info("%s jobs report to %s (loopback: workers on other nodes need the interface "
                  "named, jobqueue.%s.interface, docs/BATCH.md)", kind, address, kind)
     return cluster
+
+
+def jobqueue():
+    """The dask_jobqueue module, imported with this process's Ctrl-C handler kept: its
+    ``runner`` module sets SIGINT to ``sys.exit`` at import (0.9), which would turn a
+    Ctrl-C into a bare exit, and fails off the main thread."""
+    if "dask_jobqueue" in sys.modules:
+        return sys.modules["dask_jobqueue"]
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGINT) if main else None
+    try:
+        import dask_jobqueue
+    except ImportError:
+        raise RefusedError("--cluster needs dask-jobqueue: pip install 'ditherlab[hpc]'") \
+            from None
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous)
+    return dask_jobqueue
 
 
 @contextmanager
