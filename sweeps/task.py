@@ -90,8 +90,11 @@ def _note_block(path: str, key: str) -> None:
 def _pass_gate(folder: str) -> None:
     """Wait for a ticket (a file ``ticket*`` in ``folder``, taken by removing it) or for
     ``folder/open``: how a test holds blocks at a known point (a batch job killed while
-    blocks remain), with no timing luck."""
+    blocks remain), with no timing luck. A waiting process shows in ``waiting-<pid>``."""
+    waiting = os.path.join(folder, f"waiting-{os.getpid()}")
     while not os.path.exists(os.path.join(folder, "open")):
+        if not os.path.exists(waiting):
+            open(waiting, "w").close()
         for name in sorted(os.listdir(folder)):
             if name.startswith("ticket"):
                 try:

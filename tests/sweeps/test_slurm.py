@@ -129,3 +129,34 @@ def test_a_worker_job_killed_mid_sweep_costs_only_its_blocks(slurm_env, local_cu
     assert "8/8 ok" in out
     assert killed not in slurm.jobs(slurm_env)
     _same(tmp_path / "store", local_cube)
+
+
+def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
+    """The last block held at the gate: the other job's worker idles with nothing left to
+    submit, and its job ends while the sweep still runs (no allocation held idle)."""
+    gate = tmp_path / "gate"
+    gate.mkdir()
+    for i in range(len(SPEC["grid"]["W"]) - 1):
+        (gate / f"ticket{i}").touch()
+    proc = _submit(tmp_path, {**slurm_env, "DITHERLAB_BLOCK_GATE": str(gate)})
+    try:
+        t0, most = time.monotonic(), 0
+        while most < 2 or len(slurm.jobs(slurm_env)) > 1:
+            most = max(most, len(slurm.jobs(slurm_env)))
+            assert proc.poll() is None, proc.communicate()[1]
+            assert time.monotonic() - t0 < 600, "the idle job did not end in 600 s"
+            time.sleep(0.2)
+        assert not (gate / "open").exists() and proc.poll() is None   # the sweep still runs
+    finally:
+        (gate / "open").touch()
+    out, err = proc.communicate(timeout=900)
+    assert proc.returncode == 0, err
+    _same(tmp_path / "store", local_cube)
+
+
+def test_no_more_jobs_than_blocks():
+    from sweeps.batch import BatchWorkers
+
+    assert BatchWorkers("slurm", 5).for_blocks(3).jobs == 3
+    assert BatchWorkers("slurm", 2).for_blocks(8).jobs == 2
+    assert BatchWorkers("slurm", 2).for_blocks(0).jobs == 1
