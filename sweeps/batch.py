@@ -35,8 +35,9 @@ from .errors import RefusedError
 log = logging.getLogger("ditherlab")
 
 KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
-JOB_START_S = 5.0   # submission to a joined worker on an idle queue (single-node Slurm:
-                    # 3-5 s measured, docs/BATCH.md); a busy queue adds its wait
+JOB_START_S = 8.0   # sbatch to a joined worker on an idle queue: 8.3 s measured on the
+                    # single-node test Slurm with the 2 cores shared (docs/BATCH.md); a
+                    # busy queue adds its wait
 
 
 @dataclass(frozen=True)

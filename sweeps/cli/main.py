@@ -95,7 +95,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plan", parents=[common],
                        help="what a spec will run, and its cost per accuracy level")
     p.add_argument("spec", nargs="?", help="spec file (.toml or .json); or --scene NAME")
-    p.add_argument("--workers", type=int, default=2)
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=2)
+    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+                       help="estimate for batch jobs (their start-up counted)")
+    p.add_argument("--jobs", type=int, default=4, metavar="N", help="with --cluster")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
     p.add_argument("--record", action="store_true",
                    help="remember the estimates in the store, so that the next plan says how "

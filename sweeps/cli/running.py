@@ -89,6 +89,18 @@ def cmd_serve(args) -> int:
                  progress=False, dashboard=args.dashboard)
 
 
+def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
+    """The workers a plan's estimate counts, and the start-up it adds: a batch run's jobs
+    (no more than blocks) start in JOB_START_S on an idle queue (sweeps.batch)."""
+    if not args.cluster or plan.path != "simulate":
+        return args.workers, (0.0, "; cluster start comes on top")
+    from ..batch import JOB_START_S
+
+    jobs = max(1, min(args.jobs, len(plan.blocks)))
+    return jobs, (JOB_START_S, f" on {jobs} {args.cluster} jobs, plus {JOB_START_S:.0f} s of "
+                               "job start-up (an idle queue; a busy one adds its wait)")
+
+
 def _workers(args):
     """``--workers N`` local processes, or ``--cluster KIND --jobs N`` batch jobs."""
     if not args.cluster:
@@ -151,12 +163,13 @@ def cmd_plan(args) -> int:
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
               f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
     print(f"outputs    {', '.join(plan.outputs)}")
-    print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
-          f"phase; cluster start and first compilation come on top)")
-    found = estimates(spec, workers=args.workers)
+    workers, start = _plan_workers(args, plan)
+    print(f"estimates  (calibrated now on this machine, {workers} workers, compute "
+          f"phase{start[1]}; first compilation comes on top)")
+    found = estimates(spec, workers=workers)
     for est in found:
         print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
-              f"per point  ->  {format_seconds(est.wall_s)} wall")
+              f"per point  ->  {format_seconds(est.wall_s + start[0])} wall")
     root = store_root(args.store)
     previous = history.last_comparison(root)
     if previous:
