@@ -115,12 +115,10 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if not done.has_ready():
             time.sleep(TICK_S)
             continue
-        for future in done.next_batch(block=False):
-            if future not in inflight:   # cancelled and submitted again
-                continue
-            b, _ = inflight.pop(future)
-            sink(b, future.result())
-            bar.update(len(plan.blocks[b]))
+        finished = [(inflight.pop(f)[0], f.result()) for f in done.next_batch(block=False)
+                     if f in inflight]   # (not: cancelled and submitted again)
+        sink.many(finished)   # journaled as one group
+        bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
 
 
 def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
