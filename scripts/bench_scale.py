@@ -5,7 +5,7 @@ workers it keeps busy that follows.
     .venv/bin/python scripts/bench_scale.py [--quick]
 
 1. sink: blocks/s that the journal (one fsynced file per block) and the catalogue
-   (progress under the lease) accept, through ``sweeps.sink.BlockSink`` itself, with
+   (progress under the lease) accept, through ``sweeps.run.sink.BlockSink`` itself, with
    the cube filled and republished every 5 s as in a run (one by one, and in groups as
    the dispatch hands them over);
 2. publish: seconds to publish a cube of 10^3 .. 10^6 points, without and with
@@ -47,8 +47,8 @@ def spec_of(n_points: int, block: int = 16, hist: bool = False) -> dict:
 
 
 def _plan(spec: dict):
-    from sweeps.plan import make_plan
-    from sweeps.spec import load_spec
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec.load import load_spec
 
     return make_plan(load_spec(spec, max_points=2_000_000))
 
@@ -68,9 +68,9 @@ def sink_run(plan, root: Path, group: int = 1) -> tuple[float, int]:
     at a time (as the dispatch hands over the blocks it finds ready), then publish;
     returns (seconds, blocks)."""
     import store
-    from sweeps.cube import empty_cube
-    from sweeps.lease import Lease
-    from sweeps.sink import BlockSink
+    from sweeps.run.lease_holder import Lease
+    from sweeps.run.new_cube import empty_cube
+    from sweeps.run.sink import BlockSink
     from sweeps.version import results_fingerprint
 
     sweep = store.SweepDir(root, plan.sweep_id)
@@ -106,7 +106,7 @@ def bench_sink(tmp: Path, n_blocks: int) -> float:
 
 def bench_publish(tmp: Path, sizes: list[int]) -> None:
     import store
-    from sweeps.cube import empty_cube
+    from sweeps.run.new_cube import empty_cube
 
     for hist in (False, True):
         for n in sizes:
@@ -129,12 +129,12 @@ sys.path.insert(0, {root!r})
 from pathlib import Path
 sys.argv = ['x']
 import scripts.bench_scale as b
-import store, sweeps.sink, sweeps.cube, sweeps.lease, sweeps.plan, sweeps.spec
+import store, sweeps.run.sink, sweeps.run.new_cube, sweeps.run.lease_holder, sweeps.planning.plan, sweeps.spec.load
 import h5netcdf  # (imported by a run's first publish)
 base = int(open('/proc/self/statm').read().split()[1]) * 4096 / 1e6
 plan = b._plan(b.spec_of({n}, block=256, hist=True))
 b.sink_run(plan, Path({tmp!r}), 20)
-cube = sweeps.cube.empty_cube(plan)
+cube = sweeps.run.new_cube.empty_cube(plan)
 nbytes = sum(v.data.nbytes for v in cube.variables.values())
 hwm = [l for l in open('/proc/self/status') if l.startswith('VmHWM')][0].split()[1]
 print(base, int(hwm) / 1e3, nbytes / 1e6)
@@ -191,7 +191,7 @@ def bench_dask(sizes: list[int], n_tasks: int) -> dict[int, float]:
 
 def table(sink_rate: float, dask_rates: dict[int, float]) -> None:
     """Workers one submitter keeps busy, for a point cost (the plan's ~1 s blocks)."""
-    from sweeps.plan import BLOCK_POINTS, BLOCK_SECONDS
+    from sweeps.planning.plan import BLOCK_POINTS, BLOCK_SECONDS
 
     lo, hi = BLOCK_POINTS["simulate"]
     print("\npoint cost   block (points)   block time   submitter blocks/s   workers kept busy")

@@ -11,7 +11,7 @@ from ..lookup import catalogue, resolve_sweep, store_root
 
 def _load(args):
     """The spec of a ``submit``/``plan`` command (pydantic is imported here, not at start)."""
-    from ..spec import load_spec
+    from ..spec.load import load_spec
 
     return load_spec(args.spec, max_points=args.max_points)
 
@@ -19,8 +19,8 @@ def _load(args):
 def cmd_submit(args) -> int:
     import store
 
-    from ..plan import make_plan
-    from ..run import submit
+    from ..planning.plan import make_plan
+    from ..run.submit import submit
 
     spec = _load(args)
     plan = make_plan(spec)
@@ -91,10 +91,10 @@ def cmd_serve(args) -> int:
 
 def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
     """The workers a plan's estimate counts, and the start-up it adds: a batch run's jobs
-    (no more than blocks) start in JOB_START_S on an idle queue (sweeps.batch)."""
+    (no more than blocks) start in JOB_START_S on an idle queue (sweeps.workers.batch)."""
     if not args.cluster or plan.path != "simulate":
         return args.workers, (0.0, "; cluster start comes on top")
-    from ..batch import JOB_START_S
+    from ..workers.batch import JOB_START_S
 
     jobs = max(1, min(args.jobs, len(plan.blocks)))
     return jobs, (JOB_START_S, f" on {jobs} {args.cluster} jobs, plus {JOB_START_S:.0f} s of "
@@ -105,7 +105,7 @@ def _workers(args):
     """``--workers N`` local processes, or ``--cluster KIND --jobs N`` batch jobs."""
     if not args.cluster:
         return args.workers
-    from ..batch import BatchWorkers
+    from ..workers.batch import BatchWorkers
 
     return BatchWorkers(args.cluster, args.jobs)
 
@@ -136,10 +136,10 @@ def cmd_cancel(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from ..calibrate import estimates, format_seconds
-    from ..plan import make_plan
+    from ..estimates.time_estimate import estimates, format_seconds
+    from ..planning.plan import make_plan
 
-    from .. import history
+    from ..estimates import time_history as history
 
     spec = _load(args)
     plan = make_plan(spec)

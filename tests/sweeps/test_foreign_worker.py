@@ -1,4 +1,4 @@
-"""A worker that runs another engine gets no block (DESIGN.md §5, sweeps.matching).
+"""A worker that runs another engine gets no block (DESIGN.md §5, sweeps.workers.matching).
 
 Found as a new user would: a `dask scheduler` with one `dask worker` importing a copy of
 the package whose friction law is scaled by 1.001 (started from a folder outside the

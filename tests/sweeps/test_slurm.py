@@ -155,7 +155,7 @@ def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
 
 
 def test_no_more_jobs_than_blocks():
-    from sweeps.batch import BatchWorkers
+    from sweeps.workers.batch import BatchWorkers
 
     assert BatchWorkers("slurm", 5).for_blocks(3).jobs == 3
     assert BatchWorkers("slurm", 2).for_blocks(8).jobs == 2

@@ -1,18 +1,18 @@
 """Computing a run's blocks: on a dask cluster, one block per worker thread (plus one) in
 flight, after compiling the kernel on every worker (:func:`run_blocks`); or, for the
 analysis paths, which cost microseconds per point, in this process (:func:`run_blocks_local`).
-Finished blocks go to a :class:`sweeps.sink.BlockSink`, which also says when to stop."""
+Finished blocks go to a :class:`sweeps.run.sink.BlockSink`, which also says when to stop."""
 from __future__ import annotations
 
 import threading
 import time
 from contextlib import nullcontext
 
-from . import task
-from .cluster import dask_client
-from .matching import matched
-from .plan import Plan
-from .run_estimate import complete, estimate_into, needs_estimate
+from ..workers import task
+from ..workers.cluster import dask_client
+from ..workers.matching import matched
+from ..planning.plan import Plan
+from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from .sink import BlockSink
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
@@ -23,7 +23,7 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
                progress, timings, client=None, dashboard=None, filler=None,
                warm_up: bool = True) -> None:
     """Compute ``todo`` on the cluster. ``filler`` (e.g. a refined sweep's error sample,
-    sweeps.run_estimate.SampleRuns) gives tasks to run where a worker would otherwise
+    sweeps.estimates.error_reruns.SampleRuns) gives tasks to run where a worker would otherwise
     idle: once no block is left to submit, while fewer tasks than threads are running.
     ``warm_up=False`` skips compiling the kernel on the workers (done by an earlier call on
     the same client: ``client.run`` would wait for the filler tasks still running)."""
@@ -43,7 +43,7 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
         timings["compute_s"] = time.perf_counter() - t
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink, timings)
+            estimate_into(plan, client, sink.cube, sink.sweep, timings)
     bar.close()
 
 
@@ -76,7 +76,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     flight (a stop loses no finished work and waits for at most one block per worker).
 
     Every REFRESH_S the workers are looked at again (``client`` is a
-    :class:`sweeps.matching.MatchedClient`): joiners are checked, a block whose allowed
+    :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
     workers have all gone is submitted again, and a batch cluster's idle jobs end once
     fewer blocks are left than workers (``client.scaler``)."""
     from distributed import as_completed
@@ -149,7 +149,7 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
 
 
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
-    """Progress in points (blocks are small and cost-balanced: sweeps.plan), with tqdm's
+    """Progress in points (blocks are small and cost-balanced: sweeps.planning.plan), with tqdm's
     rate and ETA."""
     from tqdm import tqdm
 

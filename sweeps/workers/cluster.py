@@ -1,5 +1,5 @@
 """Dask clusters for a run: a client on an existing scheduler or a LocalCluster, with its
-workers ignoring Ctrl-C (the submitter stops them cleanly; sweeps.run)."""
+workers ignoring Ctrl-C (the submitter stops them cleanly; sweeps.run.submit)."""
 from __future__ import annotations
 
 import logging
@@ -22,8 +22,8 @@ class ClusterStartError(RuntimeError):
 def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str | None = None):
     """A client on an existing cluster (``scheduler`` address), on a LocalCluster of
     ``workers`` single-threaded processes, or on batch jobs (``workers`` a
-    :class:`sweeps.batch.BatchWorkers`). Its tasks reach only the workers that run this
-    engine (a :class:`sweeps.matching.MatchedClient`).
+    :class:`sweeps.workers.batch.BatchWorkers`). Its tasks reach only the workers that run this
+    engine (a :class:`sweeps.workers.matching.MatchedClient`).
 
     ``dashboard`` is the address of the LocalCluster's dask dashboard (e.g. ``":8787"``,
     needs bokeh: ``pip install 'ditherlab[dashboard]'``); its link is logged when it
@@ -45,7 +45,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
         finally:
             client.close()
         return
-    if not isinstance(workers, int):   # sweeps.batch.BatchWorkers: workers as batch jobs
+    if not isinstance(workers, int):   # sweeps.workers.batch.BatchWorkers: workers as batch jobs
         from .batch import batch_client
 
         with batch_client(workers, dashboard) as client:
@@ -79,7 +79,7 @@ class EarlyStart:
     Made on the main thread once the sweep's lease is taken. SIGINT is ignored until the
     workers are up and the submitter asks for the client, so they are born ignoring it (as
     with :func:`dask_client`); a Ctrl-C in those one or two seconds is dropped. ``warm`` is
-    ``(fn, *args)``, run on every worker once they are up (sweeps.task.warm_up)."""
+    ``(fn, *args)``, run on every worker once they are up (sweeps.workers.task.warm_up)."""
 
     def __init__(self, workers: int, dashboard: str | None, warm: tuple):
         self._cm = dask_client(None, workers, dashboard)

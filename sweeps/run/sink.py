@@ -11,10 +11,10 @@ import numpy as np
 import store
 from engine import status as S
 
-from .lease import LEASE_LOST
-from .plan import Plan
-from .task import META
-from .version import results_fingerprint
+from .lease_holder import LEASE_LOST
+from ..planning.plan import Plan
+from ..version import results_fingerprint
+from ..workers.task import META
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running ...
 PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time on it: the
@@ -42,7 +42,7 @@ class BlockSink:
         self.fingerprint = results_fingerprint()     # what every journaled block must carry
         self.foreign_blocks = 0                      # blocks refused for another engine
         self._pool = None                            # journal writers for a group of blocks
-        self.stopped: str | None = None              # sweeps.lease.CANCELLED / SHUTDOWN / ...
+        self.stopped: str | None = None              # sweeps.run.lease_holder.CANCELLED / SHUTDOWN / ...
         self._report(force=True)
 
     def __call__(self, b: int, result: dict) -> None:
@@ -73,7 +73,7 @@ class BlockSink:
         self._report()
 
     def _ours(self, b: int, result: dict) -> bool:
-        """The block's engine is this sweep's: the last line of defence (sweeps.matching)."""
+        """The block's engine is this sweep's: the last line of defence (sweeps.workers.matching)."""
         engine = result.get("fingerprint")
         if engine != self.fingerprint:
             self.foreign_blocks += 1

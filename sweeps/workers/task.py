@@ -1,7 +1,7 @@
 """The task a dask worker runs: one block of points through the engine.
 
 :func:`compute_block` never raises (a crash of the engine marks its block FAILED) and
-returns arrays only; workers never touch files (sweeps.run). :func:`warm_up` compiles the
+returns arrays only; workers never touch files (sweeps.run.submit). :func:`warm_up` compiles the
 block kernel once per worker. With ``$DITHERLAB_BLOCK_LOG`` set every computed block is
 noted in that file (:func:`block_key`), which is how the tests count block computations
 across processes.
@@ -56,14 +56,14 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
 
 def identity() -> dict:
     """What a worker runs: its results fingerprint and ditherlab version, computed from
-    the modules this process imports (run on each worker as it joins: sweeps.matching)."""
-    from .version import __version__
+    the modules this process imports (run on each worker as it joins: sweeps.workers.matching)."""
+    from ..version import __version__
 
     return {"fingerprint": _fingerprint(), "version": __version__}
 
 
 def _fingerprint() -> str:
-    from .version import results_fingerprint
+    from ..version import results_fingerprint
 
     return results_fingerprint()
 

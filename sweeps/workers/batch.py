@@ -30,7 +30,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from .errors import RefusedError
+from ..errors import RefusedError
 
 log = logging.getLogger("ditherlab")
 
@@ -122,7 +122,7 @@ def jobqueue():
 
 @contextmanager
 def batch_client(workers: BatchWorkers, dashboard: str | None = None):
-    """A matched client (sweeps.matching) on ``workers.jobs`` batch jobs, cancelled at the
+    """A matched client (sweeps.workers.matching) on ``workers.jobs`` batch jobs, cancelled at the
     end (also on failure)."""
     from distributed import Client
 

@@ -1,7 +1,7 @@
 """Workers that must match: a block is computed only by a worker that runs the submitter's
 engine (DESIGN.md §5).
 
-Each worker is asked once, as it is first seen, what it runs (``sweeps.task.identity``:
+Each worker is asked once, as it is first seen, what it runs (``sweeps.workers.task.identity``:
 its results fingerprint and ditherlab version, computed from the modules *it* imports,
 through ``client.run`` pinned to that worker). A worker with another fingerprint, or one
 that cannot run the check at all (no ditherlab, an older one), gets no block: every task
@@ -9,7 +9,7 @@ of the run is restricted to the matching workers (``workers=``,
 ``allow_other_workers=False``), and the submitter says in one line which worker, which
 fingerprint, and what to do. With only foreign workers nothing is computed and the run
 ends with that line (:class:`ForeignWorkersError`, exit 1). The sink checks each block's
-own fingerprint again before journaling it (sweeps.sink), the last line of defence.
+own fingerprint again before journaling it (sweeps.run.sink), the last line of defence.
 
 :class:`MatchedClient` is the run's client with these restrictions applied to ``submit``
 and ``run``; everything else is the dask client's.
@@ -20,7 +20,7 @@ import logging
 import time
 
 from . import task
-from .errors import UserError
+from ..errors import UserError
 
 log = logging.getLogger("ditherlab")
 
@@ -101,7 +101,7 @@ class WorkerCheck:
 class MatchedClient:
     """A dask client whose ``submit`` and ``run`` reach only the matching workers (waiting
     for one if none is connected yet); ``check`` is the :class:`WorkerCheck`, ``scaler``
-    a batch cluster's :class:`sweeps.batch.JobScaler` (None otherwise)."""
+    a batch cluster's :class:`sweeps.workers.batch.JobScaler` (None otherwise)."""
 
     scaler = None
 
