@@ -131,3 +131,37 @@ def test_beside_a_good_worker_it_computes_nothing_and_the_cube_is_clean(schedule
     local = sweeps.open_sweep(key, store=tmp_path / "local")
     for name in SPEC["outputs"]:
         np.testing.assert_array_equal(remote[name].values, local[name].values)
+
+
+def test_the_sink_never_journals_a_block_of_another_engine(tmp_path):
+    """The last line of defence, whatever the dispatch did: a block whose result carries
+    another fingerprint is not journaled and its points stay to compute; one with this
+    engine's is journaled with it."""
+    from sweeps.planning.plan import make_plan
+    from sweeps.run.lease_holder import Lease
+    from sweeps.run.new_cube import empty_cube
+    from sweeps.run.sink import BlockSink
+
+    plan = make_plan(sweeps.load_spec(SPEC))
+    sweep = store.SweepDir(tmp_path, plan.sweep_id)
+    sweep.root.mkdir(parents=True)
+    catalogue = store.Catalogue(tmp_path)
+    catalogue.register(plan.sweep_id, plan.spec.name, plan.spec.to_json(), plan.n_points,
+                       len(plan.blocks), sweep.root, results_fingerprint())
+    lease, _ = Lease.take(catalogue, plan.sweep_id, None, None)
+    journal = store.Journal(sweep.journal)
+    sink = BlockSink(plan, empty_cube(plan), journal, sweep, lease)
+
+    def result(b, fingerprint):
+        n = len(plan.blocks[b])
+        return {**{k: np.full(n, 0.5) for k in plan.outputs}, "status": np.zeros(n, np.int8),
+                "cost_s": np.zeros(n), "steps": np.ones(n, np.int64),
+                "evals": np.ones(n, np.int64), "fingerprint": fingerprint}
+
+    sink.many([(0, result(0, "0123456789ab")), (1, result(1, results_fingerprint())),
+               (2, {**result(2, None)})])
+    lease.end("failed")
+    assert sorted(journal.files()) == [1] and sink.foreign_blocks == 2
+    assert journal.engine_of(1) == results_fingerprint()
+    status = sink.cube["status"].values.ravel()
+    assert (status[plan.blocks[0]] != 0).all() and (status[plan.blocks[1]] == 0).all()
