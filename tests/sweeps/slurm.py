@@ -94,6 +94,13 @@ def stop(folder: Path, seconds: float = 30.0) -> None:
     env = {**os.environ, "SLURM_CONF": str(folder / "slurm.conf")}
     subprocess.run(["scancel", "--full", "--user", "root"], env=env, capture_output=True,
                    timeout=60)
+    t0 = time.monotonic()   # the jobs end through slurmd: stopped first, their steps outlive it
+    while time.monotonic() - t0 < seconds:
+        out = subprocess.run(["squeue", "-h"], env=env, capture_output=True, text=True,
+                             timeout=30)
+        if out.returncode != 0 or not out.stdout.strip():
+            break
+        time.sleep(0.2)
     for name in DAEMONS:
         pidfile = folder / f"{name}.pid"
         try:
