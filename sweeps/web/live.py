@@ -1,0 +1,70 @@
+"""The catalogue as the pages poll it: :func:`sweeps.overview.store_summary`, read again at
+most every ``REFRESH_S`` seconds however many pages poll, with a change cursor.
+
+Every sweep carries ``seq``, the cursor value at which it last changed; ``after=N``
+returns only the sweeps changed since cursor ``N`` (and the ids gone since), so an open
+page polling once a second receives a few rows, not the whole catalogue.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+REFRESH_S = 0.25
+
+
+class LiveCatalogue:
+    def __init__(self, root: Path, refresh_s: float = REFRESH_S):
+        self.root, self.refresh_s = Path(root), refresh_s
+        self.cursor = 0
+        self._rows: dict[str, dict] = {}
+        self._order: list[str] = []
+        self._gone: dict[str, int] = {}
+        self._read_at = -1e9
+        self._servers: list = []
+        self._warnings: dict = {}       # cube path -> (stat key, warnings): overview cache
+        self._lock = threading.Lock()
+
+    def _refresh(self) -> None:
+        from ..overview import store_summary
+
+        if time.monotonic() - self._read_at < self.refresh_s:
+            return
+        summary = store_summary(self.root, self._warnings)
+        self._read_at = time.monotonic()
+        fresh = {r["sweep_id"]: r for r in summary["sweeps"]}
+        changed = [i for i, r in fresh.items()
+                   if {k: v for k, v in self._rows.get(i, {}).items() if k != "seq"} != r]
+        gone = set(self._rows) - set(fresh)
+        if changed or gone:
+            self.cursor += 1
+        for i in changed:
+            fresh[i]["seq"] = self.cursor
+        for i in fresh:
+            fresh[i].setdefault("seq", self._rows[i]["seq"] if i in self._rows else 0)
+        for i in gone:
+            self._gone[i] = self.cursor
+        self._rows, self._order = fresh, [r["sweep_id"] for r in summary["sweeps"]]
+        self._servers = summary["servers"]
+
+    def snapshot(self) -> tuple[int, list[dict], list]:
+        """``(cursor, every sweep in catalogue order, serve processes)``."""
+        with self._lock:
+            self._refresh()
+            return self.cursor, [self._rows[i] for i in self._order], self._servers
+
+    def changes(self, after: int) -> dict:
+        """The JSON answer to ``/api/sweeps?after=N``."""
+        with self._lock:
+            self._refresh()
+            rows = [self._rows[i] for i in self._order if self._rows[i]["seq"] > after]
+            gone = [i for i, seq in self._gone.items() if seq > after]
+            return {"cursor": self.cursor, "sweeps": rows, "removed": gone,
+                    "servers": self._servers}
+
+    def find(self, sweep_id: str) -> dict | None:
+        """The sweep with exactly this id, or None (ids are looked up, never made paths)."""
+        with self._lock:
+            self._refresh()
+            return self._rows.get(sweep_id)

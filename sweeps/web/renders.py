@@ -1,0 +1,82 @@
+"""Maps for the pages, drawn by :func:`sweeps.exports.draw_map` (the function behind
+``ditherlab map``) and cached per cube publish.
+
+Renders run on ``RENDER_THREADS`` threads (matplotlib's Agg canvas, no pyplot): at most
+that many draw at once, however many pages ask. A map already being drawn is waited for,
+not drawn twice; more than ``MAX_WAITING`` maps waiting is refused (:class:`Busy`, 503)
+rather than queued without bound. Finished images are kept (``CACHE_BYTES`` in all) under
+the cube's publish key, so an unchanged cube's map is drawn once.
+"""
+from __future__ import annotations
+
+import tempfile
+import threading
+from collections import OrderedDict
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
+
+RENDER_THREADS = 1
+MAX_WAITING = 32
+CACHE_BYTES = 128 << 20
+MEDIA = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}
+
+
+class Busy(Exception):
+    """Too many maps waiting to be drawn."""
+
+
+def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:
+    """One map of ``ds`` as bytes (``fmt`` png, svg or pdf), drawn into a temporary folder
+    outside the store."""
+    from ..exports import draw_map, pick_w
+
+    if kind == "friction" and pick:
+        ds = ds.sel(W=pick_w(ds, pick))
+    with tempfile.TemporaryDirectory(prefix="ditherlab-web-") as tmp:
+        path = Path(tmp) / f"map.{fmt}"
+        draw_map(ds, kind, sel, path)
+        return path.read_bytes()
+
+
+class MapCache:
+    def __init__(self, threads: int = RENDER_THREADS, max_waiting: int = MAX_WAITING,
+                 cache_bytes: int = CACHE_BYTES):
+        self.pool = ThreadPoolExecutor(threads, thread_name_prefix="ditherlab-map")
+        self.max_waiting, self.cache_bytes = max_waiting, cache_bytes
+        self._done: OrderedDict[tuple, bytes] = OrderedDict()
+        self._pending: dict[tuple, Future] = {}
+        self._size = 0
+        self._lock = threading.Lock()
+        self.drawn = 0          # maps drawn (the tests count them)
+
+    def get(self, key: tuple, draw) -> Future:
+        """A future of the bytes for ``key``; ``draw()`` makes them if nobody has."""
+        with self._lock:
+            if key in self._done:
+                self._done.move_to_end(key)
+                done: Future = Future()
+                done.set_result(self._done[key])
+                return done
+            if key in self._pending:
+                return self._pending[key]
+            if len(self._pending) >= self.max_waiting:
+                raise Busy(f"{len(self._pending)} maps are being drawn; try again in a moment")
+            fut = self.pool.submit(self._draw, key, draw)
+            self._pending[key] = fut
+            return fut
+
+    def _draw(self, key: tuple, draw) -> bytes:
+        try:
+            data = draw()
+        except BaseException:
+            with self._lock:
+                self._pending.pop(key, None)
+            raise
+        with self._lock:   # cached before it stops pending: never drawn twice
+            self._pending.pop(key, None)
+            self.drawn += 1
+            self._done[key] = data
+            self._size += len(data)
+            while self._size > self.cache_bytes and len(self._done) > 1:
+                self._size -= len(self._done.popitem(last=False)[1])
+        return data
