@@ -42,11 +42,12 @@ class Running:
 
     def __init__(self, root: Path):
         import store
+        from sweeps.version import results_fingerprint
 
         self.cat = store.Catalogue(root)
         spec = {**AVERAGED, "name": "web-running"}
         self.cat.register(RUNNING_ID, "web-running", json.dumps(spec), 1000, 100,
-                          root / RUNNING_ID)
+                          root / RUNNING_ID, engine_fingerprint=results_fingerprint())
         ok, _ = self.cat.acquire(RUNNING_ID)
         assert ok
         self.done = 0
