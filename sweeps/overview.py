@@ -31,15 +31,21 @@ def spec_method(row: dict) -> str:
         return "?"
 
 
-def cube_warnings(cube: Path, cache: dict | None = None) -> list[str]:
+def _stat(path: Path):
+    try:
+        return os.stat(path)
+    except OSError:
+        return None
+
+
+def cube_warnings(cube: Path, cache: dict | None = None, st=None) -> list[str]:
     """The accuracy warnings a cube records ([] without a cube or estimate). ``cache`` maps
     a path to ``(stat key, warnings)``: an unchanged cube (same inode, size and mtime: a
-    publish is a rename) is not opened again."""
+    publish is a rename) is not opened again. ``st``: the cube's ``os.stat``, if known."""
     from store.attrs import accuracy_warnings
 
-    try:
-        st = os.stat(cube)
-    except OSError:
+    st = st or _stat(cube)
+    if st is None:
         return []
     key = (st.st_ino, st.st_size, st.st_mtime_ns)
     if cache is not None and cache.get(cube, (None,))[0] == key:
@@ -62,7 +68,11 @@ def sweep_summary(row: dict, live: str, root: Path, cache: dict | None = None) -
     from .progress import eta_s
 
     stale = is_stale(row)
-    cube = SweepDir(root, row["sweep_id"]).cube
+    cube = root / row["sweep_id"] / "cube.nc"   # one stat per sweep (1,000 in a catalogue)
+    st = _stat(cube)
+    if st is None:   # an older store's cube.h5, or none yet
+        cube = SweepDir(root, row["sweep_id"]).cube
+        st = _stat(cube)
     return {
         "sweep_id": row["sweep_id"], "name": row["name"], "earlier_names": earlier_names(row),
         "state": live, "stale": stale, "state_text": live + (f" ({STALE})" if stale else ""),
@@ -72,7 +82,7 @@ def sweep_summary(row: dict, live: str, root: Path, cache: dict | None = None) -
         "eta_s": _rounded(eta_s(row)) if live == "running" else None,
         "cancel_requested": bool(row.get("cancel_requested")),
         "path": spec_method(row), "folder": str(cube.parent),
-        "has_cube": cube.exists(), "warnings": cube_warnings(cube, cache),
+        "has_cube": st is not None, "warnings": cube_warnings(cube, cache, st) if st else [],
         "created": str(row["created"]), "updated": str(row["updated"]),
         "finished": str(row["updated"]) if live in FINAL else None,
         "message": str(row.get("message") or ""), "owner": str(row.get("owner") or ""),

@@ -1,5 +1,7 @@
 """The catalogue as the pages poll it: :func:`sweeps.overview.store_summary`, read again at
-most every ``REFRESH_S`` seconds however many pages poll, with a change cursor.
+most every ``REFRESH_S`` seconds however many pages poll (and, while neither the catalogue
+file, its write-ahead log nor the store folder changed, every ``IDLE_REFRESH_S``; with
+``refresh_s = 0``: on every call), with a change cursor.
 
 Every sweep carries ``seq``, the cursor value at which it last changed; ``after=N``
 returns only the sweeps changed since cursor ``N`` (and the ids gone since), so an open
@@ -12,6 +14,7 @@ import time
 from pathlib import Path
 
 REFRESH_S = 0.25
+IDLE_REFRESH_S = 2.0   # unchanged files: read again this often (a runner may have died)
 
 
 class LiveCatalogue:
@@ -22,6 +25,8 @@ class LiveCatalogue:
         self._order: list[str] = []
         self._gone: dict[str, int] = {}
         self._read_at = -1e9
+        self._files = None
+        self.pages: dict = {}         # rendered pages by (cursor, arguments): pages.py
         self._servers: list = []
         self._warnings: dict = {}       # cube path -> (stat key, warnings): overview cache
         self._lock = threading.Lock()
@@ -29,9 +34,14 @@ class LiveCatalogue:
     def _refresh(self) -> None:
         from ..overview import store_summary
 
-        if time.monotonic() - self._read_at < self.refresh_s:
+        age = time.monotonic() - self._read_at
+        if age < self.refresh_s:
             return
+        files = self._signature()
+        if files == self._files and age < IDLE_REFRESH_S and self.refresh_s > 0:
+            return   # no write to the catalogue and no new sweep folder since the last read
         summary = store_summary(self.root, self._warnings)
+        self._files = files
         self._read_at = time.monotonic()
         fresh = {r["sweep_id"]: r for r in summary["sweeps"]}
         changed = [i for i, r in fresh.items()
@@ -39,6 +49,7 @@ class LiveCatalogue:
         gone = set(self._rows) - set(fresh)
         if changed or gone:
             self.cursor += 1
+            self.pages.clear()
         for i in changed:
             fresh[i]["seq"] = self.cursor
         for i in fresh:
@@ -47,6 +58,19 @@ class LiveCatalogue:
             self._gone[i] = self.cursor
         self._rows, self._order = fresh, [r["sweep_id"] for r in summary["sweeps"]]
         self._servers = summary["servers"]
+
+    def _signature(self) -> tuple:
+        """What a change of the catalogue or of the store's folders changes: the size and
+        mtime of the catalogue, its write-ahead log and the store folder."""
+        out = []
+        for path in (self.root / "catalogue.sqlite", self.root / "catalogue.sqlite-wal",
+                     self.root):
+            try:
+                st = path.stat()
+                out.append((st.st_size, st.st_mtime_ns))
+            except OSError:
+                out.append(None)
+        return tuple(out)
 
     def snapshot(self) -> tuple[int, list[dict], list]:
         """``(cursor, every sweep in catalogue order, serve processes)``."""

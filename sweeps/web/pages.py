@@ -28,14 +28,30 @@ class Catalogue(Base):
         desc = self.get_query_argument("desc", "1" if sort == "created" else "") == "1"
         if sort not in SORTS:
             raise Refused(400, f"sort: one of {', '.join(SORTS)}, got {sort[:40]!r}")
-        cursor, rows, servers = await in_executor(self.ctx.live.snapshot)
-        states = sorted({r["state"] for r in rows} | ({"stale"} if any(r["stale"] for r in rows)
-                                                      else set()))
-        shown = [r for r in rows if _matches(r, q, state)]
-        shown.sort(key=SORT_KEYS[sort], reverse=desc)
-        self.page("catalogue.html", rows=shown, total=len(rows), cursor=cursor, q=q,
-                  state=state, states=states, sort=sort, desc=desc, servers=servers,
-                  store=str(self.ctx.root), gallery=self.ctx.gallery_dir() is not None)
+        live = self.ctx.live
+        cursor, rows, servers = await in_executor(live.snapshot)
+        key = (cursor, q, state, sort, desc)
+        html = live.pages.get(key)
+        if html is None:   # one rendering per catalogue change and view, for every reader
+            html = await in_executor(_render, rows, servers, q, state, sort, desc, cursor,
+                                     str(self.ctx.root))
+            if len(live.pages) > 64:
+                live.pages.clear()
+            live.pages[key] = html
+        self.set_header("Content-Type", "text/html; charset=utf-8")
+        self.finish(html)
+
+
+def _render(rows, servers, q, state, sort, desc, cursor, store) -> str:
+    from .base import TEMPLATES
+
+    states = sorted({r["state"] for r in rows} | ({"stale"} if any(r["stale"] for r in rows)
+                                                  else set()))
+    shown = [r for r in rows if _matches(r, q, state)]
+    shown.sort(key=SORT_KEYS[sort], reverse=desc)
+    return TEMPLATES.get_template("catalogue.html").render(
+        rows=shown, total=len(rows), cursor=cursor, q=q, state=state, states=states,
+        sort=sort, desc=desc, servers=servers, store=store)
 
 
 def _matches(row: dict, q: str, state: str) -> bool:
