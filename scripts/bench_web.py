@@ -125,10 +125,41 @@ def main() -> int:
         finally:
             server.terminate()
             server.wait()
+        cpu_costs(work / "store" / fig14 / "cube.nc")
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     return 0
+
+
+def cpu_costs(cube: Path, n: int = 3) -> None:
+    """The CPU seconds of the same work in this process: what the wall time would be on a
+    quiet machine (the wall-clock figures above include waiting for a busy CPU)."""
+    from sweeps.web.explorer import compute, spec_from_query
+    from sweeps.web.renders import render
+
+    data = cube.read_bytes()
+    render(data, "stick-slip", {}, None, "png")   # imports, fonts: once per drawing process
+    compute(spec_from_query({"W_num": "3", "v_ref_num": "3"}))   # kernels loaded
+    rows = {"first map, Fig. 14 31x31 (read + draw)": [], "explorer 200x200 compute": [],
+            "explorer stability chart draw": [], "explorer curves draw": []}
+    for i in range(n):
+        t = time.process_time()
+        render(data, "stick-slip", {}, None, "png")
+        rows["first map, Fig. 14 31x31 (read + draw)"].append(time.process_time() - t)
+        t = time.process_time()
+        ds = compute(spec_from_query({"W_num": "200", "v_ref_num": "200",
+                                      "v_d": str(0.2 + 0.001 * i)}))
+        rows["explorer 200x200 compute"].append(time.process_time() - t)
+        t = time.process_time()
+        render(ds, "stability", {}, None, "png")
+        rows["explorer stability chart draw"].append(time.process_time() - t)
+        t = time.process_time()
+        render(ds, "friction", {}, 5, "png")
+        rows["explorer curves draw"].append(time.process_time() - t)
+    print("CPU time of the same work (this process; a quiet machine's wall time):")
+    for what, ts in rows.items():
+        print(f"  {what:<42} median {1000 * float(np.median(ts)):7.1f} ms CPU")
 
 
 def run(args, fig14: str, cube: Path) -> None:

@@ -131,6 +131,7 @@ def start_in_thread(ctx: Context, host: str, port: int) -> tuple[int, callable]:
         loop = box["loop"]
         loop.call_soon_threadsafe(box["server"].stop)
         loop.call_soon_threadsafe(loop.stop)
+        ctx.maps.draw.stop()
 
     return server_port(box["server"]), stop
 

@@ -73,6 +73,7 @@ def cmd_web(args) -> int:
     async def main():
         server = start(ctx, host, port)
         ctx.explorer.warm_up()
+        ctx.maps.draw.start()
         print(f"ditherlab web: store {ctx.root}, read-only, at "
               + link.format(port=server_port(server)), file=sys.stderr, flush=True)
         await asyncio.Event().wait()
@@ -106,6 +107,7 @@ def _serve_with_web(serve_cmd):
             raise UserError(f"--web: cannot listen on {host}:{port}: "
                             f"{exc.strerror or exc}") from None
         ctx.explorer.warm_up()
+        ctx.maps.draw.start()
         print(f"ditherlab serve: web pages at {link.format(port=bound)}", file=sys.stderr,
               flush=True)
         try:

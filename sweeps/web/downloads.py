@@ -9,7 +9,7 @@ import asyncio
 from ..errors import RefusedError, UserError
 from .base import Base, Refused
 from .pages import in_executor
-from .renders import MEDIA, Busy, render
+from .renders import MEDIA, Busy
 
 MAX_CELLS = 2_000_000
 
@@ -80,7 +80,8 @@ class MapImage(Base):
         npick = int(pick) if pick else None
         key = (sweep_id, snap.key, kind, tuple(sorted(sel.items())), npick, fmt)
         try:
-            fut = self.ctx.maps.get(key, lambda: render(snap.ds, kind, sel, npick, fmt))
+            maps = self.ctx.maps
+            fut = maps.get(key, lambda: maps.draw(snap.data, kind, sel, npick, fmt))
         except Busy as exc:
             raise Refused(503, str(exc)) from None
         try:

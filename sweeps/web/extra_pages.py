@@ -13,7 +13,6 @@ from ..errors import RefusedError
 from .base import HERE, Base, Refused
 from .explorer import DEFAULTS, DITHERS, FRICTIONS, MAX_AXIS, PARAMS, Busy, curves_wanted
 from .explorer import spec_from_query
-from .renders import render
 from .security import GALLERY_CSP
 from .tomltext import spec_toml
 
@@ -78,9 +77,10 @@ class ExplorerImage(Base):
             cube = await asyncio.wrap_future(self.ctx.explorer.cube(key, spec))
         except Busy as exc:
             raise Refused(503, str(exc)) from None
-        draw = {"stability": lambda: render(cube, "stability", {}, None, "png"),
-                "friction": lambda: render(cube, "friction", {}, curves, "png")}[kind]
-        fut = self.ctx.maps.get(("explorer", key, kind, curves), draw)
+        maps = self.ctx.maps
+        draw = {"stability": lambda: maps.draw(cube, "stability", {}, None, "png"),
+                "friction": lambda: maps.draw(cube, "friction", {}, curves, "png")}[kind]
+        fut = maps.get(("explorer", key, kind, curves), draw)
         data = await asyncio.wrap_future(fut)
         self.set_header("Content-Type", "image/png")
         self.finish(data)

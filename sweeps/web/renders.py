@@ -1,8 +1,10 @@
 """Maps for the pages, drawn by :func:`sweeps.exports.draw_map` (the function behind
 ``ditherlab map``) and cached per cube publish.
 
-Renders run on ``RENDER_THREADS`` threads (matplotlib's Agg canvas, no pyplot): at most
-that many draw at once, however many pages ask. A map already being drawn is waited for,
+Renders are queued on ``RENDER_THREADS`` threads, each handing its map to a drawing
+process (matplotlib's Agg canvas, no pyplot): at most that many draw at once, however many
+pages ask, and a drawing never holds the server's interpreter lock (pages and progress stay
+quick while a map is drawn). A map already being drawn is waited for,
 not drawn twice; more than ``MAX_WAITING`` maps waiting is refused (:class:`Busy`, 503)
 rather than queued without bound. Finished images are kept (``CACHE_BYTES`` in all) under
 the cube's publish key, so an unchanged cube's map is drawn once.
@@ -27,15 +29,63 @@ class Busy(Exception):
 
 def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:
     """One map of ``ds`` as bytes (``fmt`` png, svg or pdf), drawn into a temporary folder
-    outside the store."""
+    outside the store. ``ds``: an ``xarray.Dataset``, or a cube file's bytes."""
     from ..exports import draw_map, pick_w
 
+    if isinstance(ds, bytes):
+        from .snapshot import CubeSnapshot
+
+        ds = CubeSnapshot(None, ds).ds
     if kind == "friction" and pick:
         ds = ds.sel(W=pick_w(ds, pick))
     with tempfile.TemporaryDirectory(prefix="ditherlab-web-") as tmp:
         path = Path(tmp) / f"map.{fmt}"
         draw_map(ds, kind, sel, path)
         return path.read_bytes()
+
+
+def _warm() -> None:
+    import store.maps  # noqa: F401  (matplotlib and xarray loaded before the first map)
+
+
+class Drawer:
+    """The drawing process (spawned, so it shares no threads or locks with the server),
+    started again if it dies."""
+
+    def __init__(self):
+        self._pool = None
+        self._lock = threading.Lock()
+
+    def _get(self):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        with self._lock:
+            if self._pool is None:
+                self._pool = ProcessPoolExecutor(
+                    1, mp_context=multiprocessing.get_context("spawn"))
+                self._pool.submit(_warm)
+            return self._pool
+
+    def __call__(self, *args) -> bytes:
+        from concurrent.futures.process import BrokenProcessPool
+
+        pool = self._get()
+        try:
+            return pool.submit(render, *args).result()
+        except BrokenProcessPool:   # killed (out of memory?): a fresh one, once
+            with self._lock:
+                self._pool = None
+            return self._get().submit(render, *args).result()
+
+    def start(self) -> None:
+        self._get()
+
+    def stop(self) -> None:
+        with self._lock:
+            if self._pool is not None:
+                self._pool.shutdown(wait=False, cancel_futures=True)
+                self._pool = None
 
 
 class MapCache:
@@ -48,6 +98,7 @@ class MapCache:
         self._size = 0
         self._lock = threading.Lock()
         self.drawn = 0          # maps drawn (the tests count them)
+        self.draw = Drawer()    # render(...) in the drawing process
 
     def get(self, key: tuple, draw) -> Future:
         """A future of the bytes for ``key``; ``draw()`` makes them if nobody has."""
