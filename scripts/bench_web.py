@@ -41,10 +41,10 @@ def build_store(root: Path, n: int) -> str:
     import store
     import sweeps
     from store.lease import owner_tag
-    from sweeps.cube import empty_cube
+    from sweeps.run.new_cube import empty_cube
     from sweeps.gallery.scenes import get_scene
-    from sweeps.plan import make_plan
-    from sweeps.spec import load_spec
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec.load import load_spec
     from sweeps.version import results_fingerprint
 
     res = sweeps.run_sweep(TINY, root, progress=False)

@@ -384,8 +384,8 @@ FIELD = re.compile(r"^(ditherlab: )?(/|(spec|name|description|system|friction|di
 
 def run_case(case: Case, tmp: Path, index: int) -> dict:
     from sweeps import cli
-    from sweeps.cube import empty_cube
-    from sweeps.plan import make_plan
+    from sweeps.run.new_cube import empty_cube
+    from sweeps.planning.plan import make_plan
     from sweeps.spec import SpecError, load_spec
 
     path = tmp / f"case{index}.{case.fmt}"

@@ -65,7 +65,7 @@ def sweep_summary(row: dict, live: str, root: Path, cache: dict | None = None) -
     """One sweep as JSON values (see the module docstring)."""
     from store import SweepDir
 
-    from .progress import eta_s
+    from .run.progress import eta_s
 
     stale = is_stale(row)
     cube = root / row["sweep_id"] / "cube.nc"   # one stat per sweep (1,000 in a catalogue)

@@ -73,10 +73,10 @@ def compute(spec_dict: dict):
     """The averaged cube of ``spec_dict`` (an ``xarray.Dataset``), computed here."""
     from store.points import fill
 
-    from ..cube import empty_cube
-    from ..plan import make_plan
-    from ..spec import SpecError, load_spec
-    from ..task import compute_block
+    from ..run.new_cube import empty_cube
+    from ..planning.plan import make_plan
+    from ..spec.load import SpecError, load_spec
+    from ..workers.task import compute_block
 
     try:
         plan = make_plan(load_spec(spec_dict, max_points=MAX_AXIS * MAX_AXIS))

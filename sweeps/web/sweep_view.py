@@ -46,8 +46,8 @@ def map_controls(ds, kind: str, sel: dict) -> dict:
 
 
 def _plan(spec: dict) -> dict | str:
-    from ..plan import make_plan
-    from ..spec import SpecError, load_spec
+    from ..planning.plan import make_plan
+    from ..spec.load import SpecError, load_spec
 
     try:
         plan = make_plan(load_spec(spec, max_points=10**9))
