@@ -48,6 +48,22 @@ def _warm() -> None:
     import store.maps  # noqa: F401  (matplotlib and xarray loaded before the first map)
 
 
+def _follow_parent() -> None:
+    """The drawing process ends with the server, however the server ends (SIGKILL too):
+    a thread watches for the parent to change (an orphan is adopted by another process)."""
+    import os
+    import time
+
+    parent = os.getppid()
+
+    def watch():
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(0)
+
+    threading.Thread(target=watch, daemon=True, name="ditherlab-follow-parent").start()
+
+
 class Drawer:
     """The drawing process (spawned, so it shares no threads or locks with the server),
     started again if it dies."""
@@ -63,7 +79,8 @@ class Drawer:
         with self._lock:
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"))
+                    1, mp_context=multiprocessing.get_context("spawn"),
+                    initializer=_follow_parent)
                 self._pool.submit(_warm)
             return self._pool
 

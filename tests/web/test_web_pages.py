@@ -146,3 +146,18 @@ def test_a_gallery_folder_is_served_by_name_only(web_store, serve_ctx, tmp_path)
     assert request(base, "/gallery/leak.png")[0] == 404
     assert request(base, "/gallery/missing.png")[0] == 404
     assert request(serve_ctx(Context(web_store["root"])), "/gallery/")[0] == 404
+
+
+def test_the_drawing_process_ends_with_a_killed_server(web_store):
+    proc, line = _started([str(BIN), "web", "--bind", "127.0.0.1:0", "--store",
+                           str(web_store["root"])], b"ditherlab web:")
+    port = line.decode().split("127.0.0.1:")[1].split("/")[0]
+    status, _, _ = request(f"http://127.0.0.1:{port}",
+                           f"/sweep/{web_store['avg']}/map/stability.png?sel.v_d=0.1")
+    assert status == 200
+    children = psutil.Process(proc.pid).children(recursive=True)
+    assert children   # the drawing process (and multiprocessing's resource tracker)
+    proc.kill()
+    proc.wait()
+    gone, alive = psutil.wait_procs(children, timeout=60)
+    assert not alive, [p.cmdline() for p in alive]
