@@ -2,6 +2,8 @@
 (``/sweep/ID``, ``/api/sweep/ID``)."""
 from __future__ import annotations
 
+import json
+
 from tornado.ioloop import IOLoop
 
 from .base import AXES, Base, Refused
@@ -70,7 +72,17 @@ class ApiSweeps(Base):
             after = int(self.get_query_argument("after", "0"))
         except ValueError:
             raise Refused(400, "after: expected the integer cursor of the last answer")
-        self.json(await in_executor(self.ctx.live.changes, after))
+        live = self.ctx.live
+        data = await in_executor(live.changes, after)
+        key = ("api", data["cursor"], after)
+        body = live.pages.get(key)
+        if body is None:   # serialised once per catalogue change and cursor
+            body = await in_executor(lambda: json.dumps(data, allow_nan=False, default=str))
+            if len(live.pages) > 64:
+                live.pages.clear()
+            live.pages[key] = body
+        self.set_header("Content-Type", "application/json")
+        self.finish(body)
 
 
 class ApiSweep(Base):
