@@ -100,6 +100,15 @@ def _variables(ds) -> list[dict]:
             for n, v in ds.data_vars.items()]
 
 
+SHOWN_ELSEWHERE = ("spec", "error_estimate", "accuracy_warnings", "name", "sweep_id")
+
+
+def _provenance(ds) -> list[tuple[str, str]]:
+    """The cube's global attributes (versions, engine settings, scene, parameters, times),
+    but those the page shows elsewhere."""
+    return [(k, str(v)) for k, v in ds.attrs.items() if k not in SHOWN_ELSEWHERE]
+
+
 def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     """Everything the sweep page of ``sweep_id`` (looked up in the catalogue) shows."""
     from ..errors import UserError
@@ -122,7 +131,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     if ds is None:
         return view
     view.update(axes=_axes(ds), variables=_variables(ds), counts=_counts(ds),
-                variables_names=list(ds.data_vars))
+                variables_names=list(ds.data_vars), provenance=_provenance(ds))
     for kind in fitting_maps(ds):
         controls = map_controls(ds, kind, sel)
         query = {f"sel.{a}": repr(c["chosen"]) for a, c in controls.items()}
