@@ -48,13 +48,12 @@ def _warm() -> None:
     import store.maps  # noqa: F401  (matplotlib and xarray loaded before the first map)
 
 
-def _follow_parent() -> None:
-    """The drawing process ends with the server, however the server ends (SIGKILL too):
-    a thread watches for the parent to change (an orphan is adopted by another process)."""
+def _follow_parent(parent: int) -> None:
+    """The drawing process ends with the server (pid ``parent``), however the server ends
+    (SIGKILL too, and also before this process finished starting): a thread watches for the
+    parent to change (an orphan is adopted by another process)."""
     import os
     import time
-
-    parent = os.getppid()
 
     def watch():
         while os.getppid() == parent:
@@ -74,13 +73,14 @@ class Drawer:
 
     def _get(self):
         import multiprocessing
+        import os
         from concurrent.futures import ProcessPoolExecutor
 
         with self._lock:
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(
                     1, mp_context=multiprocessing.get_context("spawn"),
-                    initializer=_follow_parent)
+                    initializer=_follow_parent, initargs=(os.getpid(),))
                 self._pool.submit(_warm)
             return self._pool
 
