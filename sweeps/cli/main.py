@@ -5,11 +5,12 @@ fault ends in one line.
                                | --cluster slurm|pbs|sge [--jobs N]] [--dashboard ADDR] [--detach]
     ditherlab serve [--store DIR] [--scheduler ADDR | --workers N | --cluster KIND [--jobs N]]
                     [--dashboard ADDR]
-    ditherlab status [SWEEP]
+    ditherlab status [SWEEP] [--format table|json]
     ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
     ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE
     ditherlab plan SPEC.toml [--record]
+    ditherlab web [--bind HOST:PORT] [--token-file F];  serve --web HOST:PORT
     ditherlab --version;  -v / -q on every command
 
 Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments) was refused,
@@ -25,6 +26,7 @@ from contextlib import contextmanager
 
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
 from .scenes import add_commands as add_scene_commands
+from ..web.cli import add_commands as add_web_commands
 from .reading import cmd_map, cmd_query, cmd_status
 from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
 
@@ -75,6 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("status", parents=[common], help="list sweeps, or show one")
     p.add_argument("sweep", nargs="?")
+    p.add_argument("--format", choices=("table", "json"), default="table",
+                   help="json: the data the web view shows (docs/WEB.md)")
     p.set_defaults(func=cmd_status)
 
     p = sub.add_parser("query", parents=[common], help="print a cube's values")
@@ -106,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
                    "far off they were (plan writes nothing otherwise)")
     p.set_defaults(func=cmd_plan)
     add_scene_commands(sub, common)   # scenes, gallery, --scene (sweeps.cli.scenes)
+    add_web_commands(sub, common)     # web, serve --web (sweeps.web.cli)
     return ap
 
 
