@@ -124,8 +124,11 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
         except UserError as exc:
             raise Refused(409, str(exc)) from None
     detail = sweep_detail(ctx.root, sweep_id, ds)
+    from ..estimates.time_history import recorded
+
     view = {"detail": detail, "toml": spec_toml(detail["spec"]), "plan": ctx.plan(sweep_id,
                                                                                   detail["spec"]),
+            "time_estimate": recorded(ctx.root, sweep_id),
             "estimate": _estimate(detail), "has_cube": ds is not None, "maps": [],
             "variables_names": []}
     if ds is None:

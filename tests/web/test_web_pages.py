@@ -165,3 +165,27 @@ def test_the_drawing_process_ends_with_a_killed_server(web_store, drawn):
     proc.wait()
     gone, alive = psutil.wait_procs(children, timeout=60)
     assert not alive, [p.cmdline() for p in alive]
+
+
+def test_the_sweep_page_shows_the_recorded_time_estimate(server, web_store):
+    """The plan's cost per level, as ``ditherlab plan --record`` kept it in the store, and
+    the time the run took; without a record the page says how to make one."""
+    from sweeps.estimates import time_history
+
+    base, _ = server
+    sid, root = web_store["avg"], web_store["root"]
+    status, _, body = request(base, f"/sweep/{sid}")
+    assert status == 200 and b"none recorded" in body and b"plan SPEC --record" in body
+    saved = (root / time_history.FILE).read_bytes() if (root / time_history.FILE).exists() \
+        else None
+    try:
+        time_history.record_estimate(root, sid, {"draft": 12.25, "standard": 31.5})
+        time_history.record_actual(root, sid, "standard", 29.75)
+        status, _, body = request(base, f"/sweep/{sid}")
+        assert status == 200
+        assert b"draft 12.2 s, standard 31.5 s" in body and b"took 29.8 s at standard" in body
+    finally:
+        if saved is None:
+            (root / time_history.FILE).unlink()
+        else:
+            (root / time_history.FILE).write_bytes(saved)
