@@ -31,6 +31,8 @@ moved to ``journal/bad/`` with one warning line and its points are computed agai
 Blocks without a checksum (journals written before checksums existed, or files
 written by another program) are treated the same way: they cannot be verified, so
 they are set aside and recomputed rather than trusted.
+A block may also hold ``_engine``, inside the checksum: the results fingerprint of the
+worker that computed it (``Journal.engine_of``).
 """
 
 from __future__ import annotations
@@ -58,6 +60,7 @@ FIELDS = {
     "evals": np.int64,
 }
 CHECKSUM = "_sha256"
+ENGINE = "_engine"   # the results fingerprint of the worker that computed the block (ASCII)
 BAD_DIR = "bad"
 _NAME = re.compile(r"^block-(\d+)\.npz$")
 
@@ -74,13 +77,8 @@ def block_payload(
     flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
 ) -> dict[str, np.ndarray]:
     """A journal payload from the arguments of ``store.points.fill`` (see module doc)."""
-    payload = {
-        "index": flat_index,
-        "status": status,
-        "cost_s": cost_s,
-        "steps": steps,
-        "evals": evals,
-    }
+    payload = {"index": flat_index, "status": status, "cost_s": cost_s, "steps": steps,
+               "evals": evals}
     clash = sorted(set(values) & set(payload))
     if clash:
         raise ValueError(
@@ -151,17 +149,23 @@ class Journal:
             raise ValueError(f"block_id must be a non-negative integer, got {block_id!r}")
         return self.folder / f"block-{int(block_id):06d}.npz"
 
-    def write(self, block_id: int, payload: Mapping[str, np.ndarray]) -> Path:
+    def write(self, block_id: int, payload: Mapping[str, np.ndarray],
+              engine: str | None = None) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
-        checksum. Free space is checked first (``store.errors.NoSpaceError``).
-
-        Writing a block again replaces it. Returns the file's path.
-        """
+        checksum and (``engine``) the fingerprint of the engine that computed it. Free
+        space is checked first (``store.errors.NoSpaceError``). Writing a block again
+        replaces it. Returns the file's path."""
         path = self.path(block_id)
         arrays = _checked(payload)
+        if engine is not None:
+            arrays[ENGINE] = np.frombuffer(engine.encode("ascii"), np.uint8)
         buf = io.BytesIO()
         np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
         return atomic_write(path, buf.getbuffer())
+
+    def engine_of(self, block_id: int) -> str | None:
+        """The fingerprint of the engine that computed a verified block (None: not recorded)."""
+        return self._verified(block_id, self.path(block_id))[1]
 
     def files(self) -> dict[int, Path]:
         """Block id -> file, for every file with a block's final name (unverified).
@@ -177,6 +181,14 @@ class Journal:
         """The verified payload of one block file; ``BadBlock`` saying why it cannot be
         trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
         path = self.path(block_id) if path is None else path
+        arrays, _ = self._verified(block_id, path)
+        try:
+            return _checked(arrays, strict=True)
+        except ValueError as err:
+            raise BadBlock(_brief(err)) from None
+
+    def _verified(self, block_id: int, path: Path) -> tuple[dict, str | None]:
+        """The arrays of a block file whose checksum holds, and its engine fingerprint."""
         try:
             with open(path, "rb") as f, np.load(f, allow_pickle=False) as npz:
                 arrays = {k: npz[k] for k in npz.files}
@@ -188,10 +200,8 @@ class Journal:
                            "another program)")
         if not np.array_equal(stored, checksum(block_id, arrays)):
             raise BadBlock("checksum mismatch (the file changed after it was written)")
-        try:
-            return _checked(arrays, strict=True)
-        except ValueError as err:
-            raise BadBlock(_brief(err)) from None
+        engine = arrays.pop(ENGINE, None)
+        return arrays, None if engine is None else engine.tobytes().decode("ascii", "replace")
 
     def read(self, blocks: Sequence[np.ndarray] | None = None, repair: bool = True
              ) -> Iterator[tuple[int, dict[str, np.ndarray]]]:

@@ -85,7 +85,7 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None)
     index, finer = runs.index, runs.finer
     parts = runs.gather(client)
     result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
-              if k != "error"}
+              if k not in task.META}
     return errest.compare(plan, cube, index, result, finer.label)
 
 

@@ -34,6 +34,7 @@ from ..workers.cluster import EarlyStart
 from .new_cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
 from .lease_holder import LEASE_LOST, Lease
+from ..workers.matching import matched
 from .outcome import SubmitResult, abort, attached_result, final_result
 from ..planning.plan import Plan
 from .progress import attach
@@ -68,7 +69,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
 
     ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
     ``client`` is a dask client to use instead of starting a cluster (``dashboard``: the
-    address of a started LocalCluster's dashboard, see :func:`sweeps.workers.cluster.dask_client`);
+    address of a started LocalCluster's dashboard, see :func:`sweeps.workers.cluster.dask_client`;
+    ``workers`` a :class:`sweeps.workers.batch.BatchWorkers` for batch jobs);
     ``owner`` the lease owner tag (default this process's ``host:pid``); ``stop`` a
     ``threading.Event`` that, once set, ends the run after its in-flight blocks and
     re-queues the sweep (serve).
@@ -107,6 +109,9 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     # a local cluster starts (and compiles the kernel) while the cube is prepared below;
     # not for a run that only republishes its cube
     local = plan.path == "simulate" and client is None and scheduler is None
+    client = matched(client)   # blocks go only to workers that run this engine
+    if not isinstance(workers, int):   # batch jobs (sweeps.workers.batch): no more than blocks
+        workers = workers.for_blocks(len(todo))
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and (todo or needs_estimate(plan, sweep, cube)) else None

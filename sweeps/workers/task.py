@@ -18,14 +18,18 @@ from engine import params as P
 from engine import status as S
 
 COUNTERS = ("status", "cost_s", "steps", "evals")
+META = ("error", "fingerprint")   # keys of a block's result that are not per-point arrays
 
 log = logging.getLogger("ditherlab")
 
 BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed block is noted in
+BLOCK_GATE_ENV = "DITHERLAB_BLOCK_GATE"  # tests: a folder of tickets, one taken per block
 
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
+    The result carries ``fingerprint``: the results fingerprint of the process that
+    computed it (the submitter journals a block only under its own: sweeps.sink).
 
     With ``$DITHERLAB_BLOCK_LOG`` set (inherited by local dask workers), appends one line
     per call to that file: pid and :func:`block_key` (how the tests count block
@@ -33,6 +37,8 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
     """
     from engine.batch import run_block
 
+    if os.environ.get(BLOCK_GATE_ENV):
+        _pass_gate(os.environ[BLOCK_GATE_ENV])
     if os.environ.get(BLOCK_LOG_ENV):
         _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))
     try:
@@ -43,9 +49,23 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
         return {**{name: nan for name in scene.outputs},
                 "status": np.full(n, S.FAILED, np.int8), "cost_s": np.zeros(n),
                 "steps": np.zeros(n, np.int64), "evals": np.zeros(n, np.int64),
-                "error": f"{type(exc).__name__}: {exc}"}
+                "error": f"{type(exc).__name__}: {exc}", "fingerprint": _fingerprint()}
     return {**res.outputs, "status": res.status, "cost_s": res.cost_s,
-            "steps": res.steps, "evals": res.evals}
+            "steps": res.steps, "evals": res.evals, "fingerprint": _fingerprint()}
+
+
+def identity() -> dict:
+    """What a worker runs: its results fingerprint and ditherlab version, computed from
+    the modules this process imports (run on each worker as it joins: sweeps.workers.matching)."""
+    from ..version import __version__
+
+    return {"fingerprint": _fingerprint(), "version": __version__}
+
+
+def _fingerprint() -> str:
+    from ..version import results_fingerprint
+
+    return results_fingerprint()
 
 
 def block_key(scene, points: np.ndarray, settings) -> str:
@@ -65,6 +85,24 @@ def _note_block(path: str, key: str) -> None:
         os.write(fd, line)   # one short O_APPEND write: lines of processes never interleave
     finally:
         os.close(fd)
+
+
+def _pass_gate(folder: str) -> None:
+    """Wait for a ticket (a file ``ticket*`` in ``folder``, taken by removing it) or for
+    ``folder/open``: how a test holds blocks at a known point (a batch job killed while
+    blocks remain), with no timing luck. A waiting process shows in ``waiting-<pid>``."""
+    waiting = os.path.join(folder, f"waiting-{os.getpid()}")
+    while not os.path.exists(os.path.join(folder, "open")):
+        if not os.path.exists(waiting):
+            open(waiting, "w").close()
+        for name in sorted(os.listdir(folder)):
+            if name.startswith("ticket"):
+                try:
+                    os.unlink(os.path.join(folder, name))
+                    return
+                except FileNotFoundError:   # another worker took it
+                    continue
+        time.sleep(0.05)
 
 
 def warm_up(scene, p: np.ndarray, settings) -> float:
