@@ -8,7 +8,7 @@ import threading
 import time
 from contextlib import nullcontext
 
-from . import task
+from . import phases, task
 from .cluster import dask_client
 from .plan import Plan
 from .run_estimate import complete, estimate_into, needs_estimate
@@ -37,10 +37,10 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
             sink.started()
             _dispatch(client, plan, todo, sink, bar, filler)
         timings["compute_s"] = time.perf_counter() - t
+        bar.close()   # the points are done: say so before the next phase
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink, timings)
-    bar.close()
+            estimate_into(plan, client, sink, timings, progress=progress)
 
 
 def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
@@ -122,8 +122,4 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
     """Progress in points (blocks are small and cost-balanced: sweeps.plan), with tqdm's
     rate and ETA."""
-    from tqdm import tqdm
-
-    return tqdm(total=sum(len(plan.blocks[b]) for b in todo), unit="point",
-                desc=f"{plan.spec.name} [{plan.sweep_id}]", disable=not enabled,
-                mininterval=0.5)
+    return phases.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point", enabled)

@@ -111,6 +111,6 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
             todo, level = _advance(plan, sink.cube), level + 1
         timings["compute_s"] = time.perf_counter() - t
         if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-            estimate_into(plan, c, sink, timings, started=early)
+            estimate_into(plan, c, sink, timings, started=early, progress=progress)
         elif early is not None:
             early.cancel(c)
