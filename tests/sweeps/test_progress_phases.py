@@ -53,7 +53,7 @@ def test_a_quiet_submit_shows_nothing(tmp_path, capfd):
     plan = make_plan(parse_spec(avg))
     assert submit(plan, tmp_path / "store", progress=False).state == "done"
     assert _states(capfd.readouterr().err, plan) == []
-    plan = make_plan(parse_spec({**avg, "name": "told"}))
+    plan = make_plan(parse_spec({**avg, "grid": {"W": [0.0, 0.4], "v_ref": [0.1, 0.5]}}))
     assert submit(plan, tmp_path / "store", progress=True).state == "done"
     phases = [s.split(":")[0] for s in _states(capfd.readouterr().err, plan)]
     assert phases[0] == "points" and phases[-1] == "publishing the cube", phases
