@@ -29,8 +29,9 @@ from sweeps.task import compute_block as REAL_COMPUTE_BLOCK
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
-# 16 one-point blocks of ~0.3-2 s each: time to act on a running sweep between blocks
-SLOW_SPEC = RESUME_SPEC.replace("t_end = 300.0", "t_end = 900.0").replace(
+# 16 one-point blocks; a test acts on the running sweep while it holds them at the gate (it
+# needed blocks of 0.3-2 s, t_end = 900, to have time to act between them, and hoped)
+SLOW_SPEC = RESUME_SPEC.replace(
     'name = "e2e-sim"', 'name = "e2e-slow"').replace(
     "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]", "W = [0.0, 0.2, 0.4, 0.6]")
 FAST_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1")
