@@ -239,7 +239,6 @@ def test_a_killed_unreaped_submitter_reads_stalled(tmp_path):
     import signal
     import subprocess
     import sys
-    import time
 
     from store.catalogue import Catalogue
     from store.lease import STALLED, owner_tag
