@@ -26,7 +26,7 @@ Definitions (``T = t_end - t_transient``):
   with that reading on an exact trajectory (DESIGN.md §1 reference shares). The share still
   depends on the gap (about 0.003 per decade on the Sec. 7 slider: sliding ends where
   ``z_ss`` starts to rise, by an exponentially small amount), so it needs the state to
-  about ``gap * z_ss``: the accuracy levels tighten the tolerance for it (sweeps.accuracy).
+  about ``gap * z_ss``: the accuracy levels tighten the tolerance for it (sweeps.spec.accuracy).
   **Bookkeeping**: the phases depend on the state only through the signed ratio
   ``rho = sgn(u) z / z_ss(u)`` (stick: ``rho <= lam``; sliding: ``rho >= 1 - gap``), which
   is smooth inside a step when the step does not cross ``u = 0`` (adaptive methods land on

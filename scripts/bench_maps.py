@@ -99,7 +99,7 @@ def computed(ds) -> int:
 
 
 def estimate_s(spec: dict) -> float:
-    from sweeps.calibrate import estimates
+    from sweeps.estimates.time_estimate import estimates
 
     level = spec.get("accuracy", "standard")
     return next(e.wall_s for e in estimates(sweeps.load_spec(spec)) if e.level == level)

@@ -18,10 +18,10 @@ import argparse
 import tempfile
 import time
 
-from sweeps.plan import make_plan
-from sweeps.run import submit
+from sweeps.planning.plan import make_plan
+from sweeps.run.submit import submit
 from sweeps.spec import parse_spec
-from sweeps.task import compute_block, warm_up
+from sweeps.workers.task import compute_block, warm_up
 
 
 def bench_spec(n_w: int, n_omega: int, n_vref: int, t_end: float, block_size=None) -> dict:

@@ -48,7 +48,7 @@ sys.path.insert(0, str(ROOT))
 
 import store  # noqa: E402
 from sweeps import task as sweeps_task  # noqa: E402
-from sweeps.plan import make_plan  # noqa: E402
+from sweeps.planning.plan import make_plan  # noqa: E402
 from sweeps.spec import load_spec  # noqa: E402
 
 BIN = Path(sys.executable).parent / "ditherlab"

@@ -5,7 +5,7 @@ Run: ``.venv/bin/python scripts/work_precision.py [--quick] [--scenes fig10 sec7
 
 For each canonical scene (:data:`SCENES`, each a sweep spec of one grid point, so the
 scene, parameters and point are exactly those the sweep service would build through
-``sweeps.plan.make_plan``) every integrator of ``engine.integrators.METHODS`` is run over
+``sweeps.planning.plan.make_plan``) every integrator of ``engine.integrators.METHODS`` is run over
 its step/tolerance ladder (:data:`LADDERS`): ``rk4`` over steps per (half-)period (or the
 step ``h`` without dither), ``dopri5`` and ``rodas4`` over ``rtol`` with
 ``atol = ATOL_RATIO * rtol``. Each run is timed through ``engine.batch.run_block`` (one
@@ -20,7 +20,7 @@ Reference: the first entry of ``SCENES[name]["refs"]`` (DP5 at rtol 1e-12); ever
 entry is an independent converged run (RK4 with many steps, RODAS at a tight tolerance)
 and the tables report how far they agree with it, per output.
 
-Also measured: the accuracy levels of ``sweeps.accuracy`` on every scene (through
+Also measured: the accuracy levels of ``sweeps.spec.accuracy`` on every scene (through
 ``make_plan(spec, level)``, i.e. the integrator and settings the service would use); the
 Fig. 10 quench verdict over the paper's W values at every level; the explicit/stiff
 crossover in sigma0; and the "only the effects a scene calls for" cost table
@@ -61,7 +61,7 @@ from wp_core import (  # noqa: E402 (after the sys.path set-up)
 )
 
 from engine import status as S
-from sweeps.spec_models import LEVELS
+from sweeps.spec.models import LEVELS
 
 
 # --------------------------------------------------------------------------- studies
@@ -99,7 +99,7 @@ def study_scene(name: str, quick: bool, repeats: int, ladders: bool = True) -> d
 
 
 def study_levels(results: dict, repeats: int) -> dict:
-    """Error and cost of each level of sweeps.accuracy on each studied scene."""
+    """Error and cost of each level of sweeps.spec.accuracy on each studied scene."""
     out = {}
     for name, res in results.items():
         ref, out[name] = res["refs"][0], {}

@@ -4,11 +4,11 @@
   [5, 10]) at sigma0 = 1e2 ... 1e6: for each method, the cheapest rung of its ladder whose
   combined error is <= each target of :data:`TARGETS` against DP5 at rtol 1e-12
   (atol 1e-15). Where the explicit methods turn stability-bound, this says from which
-  sigma0 on the stiff method pays (``sweeps.accuracy.STIFF_SIGMA0``).
+  sigma0 on the stiff method pays (``sweeps.spec.accuracy.STIFF_SIGMA0``).
 - :func:`study_effects` -- "only the effects a scene calls for": the Sec. 7 scene
   (elasto-plastic, sine-velocity dither, slow force: every effect present) with each effect
   (a) present, (b) made to vanish by its parameter but still compiled in, (c) vanishing and
-  compiled out (the Scene flag off, what ``sweeps.plan`` does). (b) and (c) integrate the
+  compiled out (the Scene flag off, what ``sweeps.planning.plan`` does). (b) and (c) integrate the
   same trajectory, so their time ratio is the saving of specialisation alone; (a) against
   (c) is the whole cost of the effect (the trajectory changes too, hence evals and
   ns/eval). Observables: the plain scene without outputs against one output at a time.

@@ -179,8 +179,8 @@ SHORT = {"v_mean": "v_mean", "v_slow_p2p": "p2p", "F_mean": "F_mean", "stick_fra
 
 def promises_table(levels: dict) -> str:
     """Per scene and level: the error of every output against the scene's reference, marked
-    ** where it exceeds what the level promises for it (sweeps.accuracy.promise)."""
-    from sweeps.accuracy import promise
+    ** where it exceeds what the level promises for it (sweeps.spec.accuracy.promise)."""
+    from sweeps.spec.accuracy import promise
     rows = []
     for name, by_level in levels.items():
         friction = wp.SCENES[name]["spec"]["friction"] if name in wp.SCENES else None
@@ -202,7 +202,7 @@ def promises_table(levels: dict) -> str:
 
 
 def promise_rows() -> str:
-    from sweeps.accuracy import LAW_PROMISE_OVERRIDES, TARGET_ERROR, promise
+    from sweeps.spec.accuracy import LAW_PROMISE_OVERRIDES, TARGET_ERROR, promise
     rows = [[o, *(f"{promise(lv, o):.0e}" for lv in TARGET_ERROR)] for o in PROMISE_COLUMNS]
     for law, by_output in LAW_PROMISE_OVERRIDES.items():
         for o in by_output:
@@ -289,7 +289,7 @@ def replace_section(text: str, name: str, body: str) -> str:
 
 
 def sections(data: dict) -> dict:
-    from sweeps.accuracy import TARGET_ERROR
+    from sweeps.spec.accuracy import TARGET_ERROR
     sc = data["scenes"]
     meta = data["meta"]
     sec = {"meta": (f"Generated {meta['date']} from engine {meta.get('engine', '?')} "

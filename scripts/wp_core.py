@@ -20,7 +20,7 @@ from engine import params as P
 from engine import status as S
 from engine.batch import run_block
 from engine.settings import Settings
-from sweeps.plan import make_plan
+from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
 
 DOCS = ROOT / "docs"
@@ -92,7 +92,7 @@ SCENES = {
         "queried": ("v_slow_p2p", "F_mean", "v_mean"),
         "refs": [DP5_REF, ("rk4", {"steps_per_period": 512})]},
     # sigma0 = 1e6 (tests/hard's stiff case): past the explicit/stiff crossover, calibrates
-    # the stiff method's levels (sweeps.accuracy.STIFF_LEVELS).
+    # the stiff method's levels (sweeps.spec.accuracy.STIFF_LEVELS).
     "stiff6": {
         "spec": _spec("stiff6", "lugre", "square-velocity", 0.4, 1000.0, 0.4, 50.0,
                       {"sigma0": 1e6}),
@@ -184,7 +184,7 @@ def quantity_error(name: str, q: float, q_ref: float) -> float:
         return math.inf
     if name in FRACTIONS:
         return abs(q - q_ref)
-    if name == "max_stick":     # against the long-stick threshold (sweeps.accuracy.promise)
+    if name == "max_stick":     # against the long-stick threshold (sweeps.spec.accuracy.promise)
         return abs(q - q_ref) / max(abs(q_ref), P.PAPER_DEFAULTS["long_stick"])
     if q_ref == 0.0:
         return abs(q)

@@ -47,7 +47,7 @@ BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
     "steps": (np.int64, 0, "accepted integrator steps", "1"),
     "evals": (np.int64, 0, "right-hand-side evaluations", "1"),
 }
-# refined sweeps (sweeps.refine): per point, computed or inferred from computed neighbours
+# refined sweeps (sweeps.planning.refine): per point, computed or inferred from computed neighbours
 PROVENANCE = "provenance"
 PROVENANCE_MEANINGS = ("computed", "inferred", "not_yet_decided")
 RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index", PROVENANCE}

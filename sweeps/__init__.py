@@ -29,11 +29,11 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     submod_attrs={
         "api": ["open_sweep", "run_sweep"],
         "errors": ["InferredPointsWarning"],
-        "plan": ["Plan", "make_plan"],
-        "outcome": ["SubmitResult"],
-        "run": ["submit"],
-        "spec": ["SpecError", "load_spec", "parse_spec"],
-        "spec_models": ["Spec"],
+        "planning.plan": ["Plan", "make_plan"],
+        "run.outcome": ["SubmitResult"],
+        "run.submit": ["submit"],
+        "spec.load": ["SpecError", "load_spec", "parse_spec"],
+        "spec.models": ["Spec"],
         "version": ["__version__"],
     },
 )

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .errors import InferredPointsWarning
 from .lookup import catalogue, check_cube_of, inferred_note, resolve_sweep, stale_note, store_root
-from .spec import DEFAULT_MAX_POINTS, Spec, load_spec
+from .spec.load import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
 def run_sweep(spec, store: str | Path | None = None, *, client=None,
@@ -39,8 +39,8 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
         ``sweep_id``, ``state``, counts and ``cube_path``; open the cube with
         :func:`open_sweep`. Raises :class:`sweeps.SpecError` for a refused spec.
     """
-    from .plan import make_plan
-    from .run import submit
+    from .planning.plan import make_plan
+    from .run.submit import submit
 
     _refuse_in_spawned_import()
     if not isinstance(spec, Spec):
@@ -54,7 +54,7 @@ def _refuse_in_spawned_import() -> None:
     ``__mp_main__`` (multiprocessing's 'spawn'). A script that calls :func:`run_sweep` at its
     top level, not under ``if __name__ == "__main__":``, would have each worker run the
     sweep again (and wait forever on the first run's lease): the worker says so in one line
-    and exits, and the submitter's cluster start fails (:func:`sweeps.cluster.dask_client`)."""
+    and exits, and the submitter's cluster start fails (:func:`sweeps.workers.cluster.dask_client`)."""
     frame = sys._getframe(1)
     while frame is not None:
         if frame.f_globals.get("__name__") == "__mp_main__":   # this worker dies quietly

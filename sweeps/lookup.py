@@ -84,7 +84,7 @@ def is_stale(row: dict, ds=None) -> bool:
     made = engine_of(row, ds)
     if made:
         return made != results_fingerprint()
-    from .spec import load_spec
+    from .spec.load import load_spec
 
     try:
         spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
@@ -127,7 +127,7 @@ def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
 def inferred_note(provenance) -> str | None:
     """One line saying how many of these points a refined sweep inferred, or None.
 
-    ``provenance`` is the cube's flag (sweeps.refine: 0 computed, 1 inferred), whole or a
+    ``provenance`` is the cube's flag (sweeps.planning.refine: 0 computed, 1 inferred), whole or a
     selection. An inferred point holds a computed neighbour's outputs: they settle the
     map's class there (zone, stability label) but are not computed values."""
     import numpy as np

@@ -13,16 +13,16 @@ transaction; a process computes a sweep's blocks only while it holds the sweep's
   journal keeps them), goes back to ``queued`` with a message, and serve exits 0. A second
   signal stops at once (the journal still keeps every finished block).
 - A foreground ``submit`` takes the lease (``Catalogue.acquire``). If a live process holds it,
-  the submitter *attaches* (:func:`sweeps.progress.attach`): it computes nothing, prints the progress the
+  the submitter *attaches* (:func:`sweeps.run.progress.attach`): it computes nothing, prints the progress the
   holder writes to the catalogue, and returns the final result. If the holder dies (its pid is
   gone on this host, or its heartbeat is older than ``STALE_S``), the attached submitter takes
   the lease over and computes the blocks still missing from the journal.
 - ``ditherlab cancel`` (:func:`cancel`): a queued sweep is cancelled at once; a running one is
-  flagged, and its runner, which asks the catalogue between blocks (:meth:`sweeps.lease.Lease.stop_reason`),
+  flagged, and its runner, which asks the catalogue between blocks (:meth:`sweeps.run.lease_holder.Lease.stop_reason`),
   stops after its in-flight blocks.
 
 While it holds a lease a runner beats every ``HEARTBEAT_S`` seconds from a thread
-(:class:`sweeps.lease.Lease`); a beat that finds the lease taken over stops the runner too, so a block is
+(:class:`sweeps.run.lease_holder.Lease`); a beat that finds the lease taken over stops the runner too, so a block is
 never computed by two processes that both believe they own the sweep.
 """
 from __future__ import annotations
@@ -38,7 +38,7 @@ import store
 from store.catalogue import Catalogue
 from store.lease import HEARTBEAT_S, owner_tag
 
-from .progress import ATTACH_POLL_S, format_seconds, progress_text
+from .run.progress import ATTACH_POLL_S, format_seconds, progress_text
 
 log = logging.getLogger("ditherlab")
 
@@ -120,10 +120,10 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
           progress: bool = False, say=None, dashboard: str | None = None) -> int:
     """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
     (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
-    from .cluster import dask_client
-    from .plan import make_plan
-    from .run import submit
-    from .spec import SpecError, load_spec
+    from .workers.cluster import dask_client
+    from .planning.plan import make_plan
+    from .run.submit import submit
+    from .spec.load import SpecError, load_spec
 
     say = say or (lambda text: print(text, file=sys.stderr, flush=True))
     root = store.layout.check_store(store_root, write=True)

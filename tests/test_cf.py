@@ -1,6 +1,6 @@
 """Cubes are CF-clean and readable by the usual netCDF tools (DESIGN.md §4, issue 14).
 
-Each cube is made by the service's own writer (``sweeps.cube.empty_cube`` from a real plan,
+Each cube is made by the service's own writer (``sweeps.run.new_cube.empty_cube`` from a real plan,
 then ``store.publish``) for every analysis path, so every output's ``long_name``/``units``
 and every global attribute is checked; only the computing is skipped (values stay NaN,
 status "not yet computed"), which CF does not look at.
@@ -20,7 +20,7 @@ import xarray as xr
 
 import store
 import sweeps
-from sweeps.cube import empty_cube
+from sweeps.run.new_cube import empty_cube
 
 TABLES = Path(__file__).parent / "data" / "cf"
 SPECS = {

@@ -126,3 +126,91 @@ def test_no_module_is_over_300_lines():
                             f"seam, STYLE.md 'Small'): {unexpected}")
     fixed = sorted(allowed - set(long))
     assert not fixed, f"now at most {MAX_MODULE_LINES} lines: drop {fixed} from the allow-list"
+
+
+# --- the rooms of sweeps/ run one way ------------------------------------------------------
+# sweeps/ is a chain of units (a sub-package, or a module at its root), lowest first. The
+# rule: a module may import (at module level AND inside a function: a deferred import is
+# still a dependency) only modules of its own unit or of units earlier in SWEEPS_CHAIN.
+# ``sweeps/__init__.py`` is the public face above the chain: it re-exports (lazily) from
+# any unit, and nothing in the chain imports it. docs/ARCHITECTURE.md draws the chain.
+
+SWEEPS_CHAIN = (
+    "errors",      # exceptions and exit codes
+    "version",     # __version__, results_fingerprint (reads files, imports no sweeps module)
+    "spec",        # models, messages, grid, methods, accuracy levels, checks, load_spec
+    "planning",    # Plan, make_plan, blocks, refinement lattice
+    "workers",     # the dask worker's task, the cluster
+    "estimates",   # the error estimate (and running it), the wall-time estimate
+    "run",         # submit: lease, sink, journal, dispatch, refined levels, outcome
+    "service",     # the queue: enqueue, serve, cancel
+    "lookup",      # a sweep by id / prefix / name, stale notes
+    "api",         # run_sweep, open_sweep
+    "gallery",     # the paper's figures as scenes
+    "cli",         # the ditherlab command line
+)
+
+
+def _unit(module: str) -> str | None:
+    """The chain unit of a ``sweeps`` module (None for the package itself)."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else None
+
+
+def _all_imports(path: Path, package: str) -> set[tuple[int, str]]:
+    """(line, module) of every import of ``package`` anywhere in ``path``, functions too
+    (``from package import name``: the module ``package.name``)."""
+    me = _module_name(path)
+    base = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            out |= {(node.lineno, a.name) for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            mod = node.module or ""
+            if node.level:
+                anchor = base.split(".")[:len(base.split(".")) - node.level + 1]
+                mod = ".".join(anchor + ([mod] if mod else []))
+            out |= {(node.lineno, f"{mod}.{a.name}") for a in node.names} if mod == package \
+                else {(node.lineno, mod)}
+    return {(n, m) for n, m in out if m == package or m.startswith(package + ".")}
+
+
+def _backward_imports(files) -> list[str]:
+    rank = {unit: i for i, unit in enumerate(SWEEPS_CHAIN)}
+    found = []
+    for f in files:
+        me = _module_name(f)
+        if me == "sweeps":
+            continue
+        mine = rank[_unit(me)]
+        for line, target in sorted(_all_imports(f, "sweeps")):
+            unit = _unit(target)
+            if unit not in rank:   # `import sweeps`, or a name of its face
+                found.append(f"{me}:{line} imports {target} (the package's face)")
+            elif rank[unit] > mine:
+                found.append(f"{me}:{line} imports {target} ({unit} is above {_unit(me)})")
+    return found
+
+
+def test_sweeps_units_are_all_in_the_chain():
+    units = {_unit(_module_name(f)) for f in (ROOT / "sweeps").rglob("*.py")} - {None}
+    assert units == set(SWEEPS_CHAIN), (f"add to or drop from SWEEPS_CHAIN: "
+                                        f"{sorted(units ^ set(SWEEPS_CHAIN))}")
+
+
+def test_sweeps_units_import_only_down_the_chain():
+    found = _backward_imports(sorted((ROOT / "sweeps").rglob("*.py")))
+    assert not found, "imports up the chain (SWEEPS_CHAIN):\n" + "\n".join(found)
+
+
+def test_the_chain_check_sees_deferred_and_relative_imports(tmp_path, monkeypatch):
+    pkg = tmp_path / "sweeps" / "spec"
+    pkg.mkdir(parents=True)
+    (pkg / "load.py").write_text("def f():\n    from ..run.submit import submit\n")
+    monkeypatch.setattr(sys.modules[__name__], "ROOT", tmp_path)
+    (pkg / "grid.py").write_text("from .models import Spec\nfrom .. import errors\n")
+    (pkg / "checks.py").write_text("import sweeps\n")
+    assert _backward_imports([pkg / "load.py", pkg / "grid.py", pkg / "checks.py"]) == [
+        "sweeps.spec.load:2 imports sweeps.run.submit (run is above spec)",
+        "sweeps.spec.checks:1 imports sweeps (the package's face)"]

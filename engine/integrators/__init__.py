@@ -94,7 +94,7 @@ from .problem import (
 
 #: name -> method module (see the protocol above)
 METHODS = {m.NAME: m for m in (rk4, dopri5, rodas4)}
-METHODS["rosenbrock"] = rodas4  # alias: sweeps.accuracy.STIFF_METHOD
+METHODS["rosenbrock"] = rodas4  # alias: sweeps.spec.accuracy.STIFF_METHOD
 
 __all__ = [
     "CONFIG", "CTR_EVALS", "CTR_NREC",

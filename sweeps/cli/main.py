@@ -23,7 +23,7 @@ import sys
 from contextlib import contextmanager
 
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
-from ..gallery.cli import add_commands as add_scene_commands
+from .scenes import add_commands as add_scene_commands
 from .reading import cmd_map, cmd_query, cmd_status
 from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
 
@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="remember the estimates in the store, so that the next plan says how "
                    "far off they were (plan writes nothing otherwise)")
     p.set_defaults(func=cmd_plan)
-    add_scene_commands(sub, common)   # scenes, gallery, --scene (sweeps.gallery.cli)
+    add_scene_commands(sub, common)   # scenes, gallery, --scene (sweeps.cli.scenes)
     return ap
 
 

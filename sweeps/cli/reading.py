@@ -17,7 +17,7 @@ from ..lookup import (STALE, catalogue, check_cube_of, inferred_note, is_stale, 
 
 def parse_sel(items: list[str] | None) -> dict[str, float]:
     """``--sel AXIS=VALUE ...`` as a dict; an axis given twice is refused (one value each;
-    ``map --kind friction`` takes several W curves before this, sweeps.gallery.cli)."""
+    ``map --kind friction`` takes several W curves before this, sweeps.cli.scenes)."""
     sel = {}
     for item in items or ():
         axis, eq, value = item.partition("=")
@@ -180,7 +180,7 @@ def _print_error_estimate(ds) -> None:
 
 
 def _warn_accuracy(ds) -> None:
-    """One stderr line per accuracy warning recorded in the cube (sweeps.estimate)."""
+    """One stderr line per accuracy warning recorded in the cube (sweeps.estimates.error_estimate)."""
     from store.attrs import accuracy_warnings
 
     for w in accuracy_warnings(ds.attrs):

@@ -11,7 +11,7 @@ from ..lookup import catalogue, resolve_sweep, store_root
 
 def _load(args):
     """The spec of a ``submit``/``plan`` command (pydantic is imported here, not at start)."""
-    from ..spec import load_spec
+    from ..spec.load import load_spec
 
     return load_spec(args.spec, max_points=args.max_points)
 
@@ -19,8 +19,8 @@ def _load(args):
 def cmd_submit(args) -> int:
     import store
 
-    from ..plan import make_plan
-    from ..run import submit
+    from ..planning.plan import make_plan
+    from ..run.submit import submit
 
     spec = _load(args)
     plan = make_plan(spec)
@@ -115,10 +115,10 @@ def cmd_cancel(args) -> int:
 
 
 def cmd_plan(args) -> int:
-    from ..calibrate import estimates, format_seconds
-    from ..plan import make_plan
+    from ..estimates.time_estimate import estimates, format_seconds
+    from ..planning.plan import make_plan
 
-    from .. import history
+    from ..estimates import time_history as history
 
     spec = _load(args)
     plan = make_plan(spec)

@@ -1,10 +1,10 @@
-"""Accuracy levels on the Fig. 10(d) scene (docs/ACCURACY.md, sweeps.accuracy).
+"""Accuracy levels on the Fig. 10(d) scene (docs/ACCURACY.md, sweeps.spec.accuracy).
 
 The levels are calibrated by scripts/work_precision.py on tau in [0, 100]; here a short
 window (tau in [0, 10], observed on [5, 10]) checks, through the same path the sweep
 service takes (``make_plan(spec, level)`` -> ``run_block``), that the levels are ordered
 (draft less accurate than standard, standard than reference) and that each stays within
-its documented bound ``sweeps.accuracy.TARGET_ERROR``.
+its documented bound ``sweeps.spec.accuracy.TARGET_ERROR``.
 
 Reference: DP5 at rtol 1e-12 (atol 1e-15), confirmed by an independent RK4 run with 128
 steps per half-period (no error control, no kink location) that must agree with it far
@@ -17,10 +17,10 @@ import pytest
 from engine import status as S
 from engine.batch import run_block
 from engine.settings import Settings
-from sweeps.accuracy import TARGET_ERROR
-from sweeps.plan import make_plan
+from sweeps.spec.accuracy import TARGET_ERROR
+from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
-from sweeps.spec_models import LEVELS
+from sweeps.spec.models import LEVELS
 
 QUERIED = ["v_slow_p2p", "F_mean", "v_mean"]
 SPEC = {  # Fig. 10(d): LuGre slider, paper Sec. 5.1 parameters, square-velocity dither

@@ -19,8 +19,8 @@ import pytest
 from engine import params as P
 from engine.batch import run_block
 from engine.phase_book import share_above
-from sweeps.accuracy import promise
-from sweeps.plan import make_plan
+from sweeps.spec.accuracy import promise
+from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
 
 REFS = json.loads((Path(__file__).parents[1] / "hard" / "phase_references.json").read_text())

@@ -1,5 +1,5 @@
 """The outputs made of sticking runs keep their level's promise where a run is split by a
-grazing exit (sweeps.accuracy.PROMISE_OVERRIDES; docs/ACCURACY.md 5.1).
+grazing exit (sweeps.spec.accuracy.PROMISE_OVERRIDES; docs/ACCURACY.md 5.1).
 
 Two points of Fig. 14 (specs/fig14.toml: elasto-plastic slider, sine-velocity dither,
 v_ref 0.1, slow force 1.7 sin(0.3 tau), tau in [20, 100]) where, at standard, a long run is
@@ -24,10 +24,10 @@ from engine import params as P
 from engine import status as S
 from engine.batch import run_block
 from engine.settings import Settings
-from sweeps.accuracy import promise
-from sweeps.plan import make_plan
+from sweeps.spec.accuracy import promise
+from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
-from sweeps.spec_models import LEVELS
+from sweeps.spec.models import LEVELS
 
 RUN_OUTPUTS = ["long_stick_fraction", "max_stick"]
 POINTS = np.array([[2.4, 10.0 ** 2.8, 0.1, 0.1],    # W, omega (Fig. 14 grid), v_ref, v_d

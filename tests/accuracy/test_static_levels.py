@@ -5,13 +5,13 @@ automaton with exact sticking (``u = 0`` held, breakaway at the break-away level
 switch a restart; scipy DOP853 at rtol 1e-12, tests/engine/reference.py), independent of the
 engine. The engine sticks inside its Karnopp band ``|u| < stick_band`` (1e-6), so it agrees
 to O(band); each level must stay within what it promises for ``stick_fraction``
-(``sweeps.accuracy.promise``), through the path the sweep service takes (``make_plan`` ->
+(``sweeps.spec.accuracy.promise``), through the path the sweep service takes (``make_plan`` ->
 ``run_block`` with the level's integrator and tolerances).
 
 Draft used DP5 at rtol 1e-5, whose velocity error per step (~4e-6) exceeds the band: the
 landings on its edge ended outside it and stick was lost (0.0013 for an exact 0.3413 at
 W = 0.2), with status OK; it now runs at rtol <= 0.01 stick_band
-(sweeps.accuracy ``STATIC_RTOL_PER_BAND``).
+(sweeps.spec.accuracy ``STATIC_RTOL_PER_BAND``).
 """
 import numpy as np
 import pytest
@@ -19,10 +19,10 @@ import pytest
 from engine import params as P
 from engine import status as S
 from engine.batch import run_block
-from sweeps.accuracy import promise
-from sweeps.plan import make_plan
+from sweeps.spec.accuracy import promise
+from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
-from sweeps.spec_models import LEVELS
+from sweeps.spec.models import LEVELS
 from tests.engine import reference as R
 
 T_END, T_TR, W = 3.0, 1.0, (0.2, 0.4, 0.8)

@@ -1,7 +1,7 @@
 """The Fig. 9 chart of specs/fig09.toml, labelled by connected components (DESIGN.md §1).
 
 The spec's averaged path, on a coarser grid, computed block by block as ``ditherlab
-submit`` does (sweeps.plan + sweeps.task.compute_block, no cluster, no files) and labelled
+submit`` does (sweeps.planning.plan + sweeps.workers.task.compute_block, no cluster, no files) and labelled
 by the store's query. Above v_ref = 0.2986 the undithered equilibrium is stable, so the
 primary zone lifts off W = 0 there; the paper says it "extends over the whole range of
 reference velocity" (Sec. 6, Fig. 9): it must stay one PU zone, not be cut at
@@ -16,10 +16,10 @@ from scipy import ndimage
 
 import store
 from store import PU, STABLE, SU
-from sweeps.cube import empty_cube
-from sweeps.plan import make_plan
+from sweeps.run.new_cube import empty_cube
+from sweeps.planning.plan import make_plan
 from sweeps.spec import load_spec
-from sweeps.task import compute_block
+from sweeps.workers.task import compute_block
 
 SPEC = Path(__file__).resolve().parents[2] / "specs" / "fig09.toml"
 V_C = 0.2986  # undithered threshold (DESIGN.md §1; test_analysis_stability.py computes it)

@@ -25,7 +25,7 @@ from ..sweeps.conftest import SIMULATE_SPEC as SPEC   # 8 points, LuGre, square 
 BLOCKS = """
 import sys, numpy as np
 from sweeps.spec import load_spec
-from sweeps.plan import make_plan
+from sweeps.planning.plan import make_plan
 from engine.batch import run_block
 plan = make_plan(load_spec(sys.argv[1]))
 res = {}

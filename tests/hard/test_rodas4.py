@@ -29,7 +29,7 @@ def _kwargs(tab):
 
 def test_registered_under_its_name_and_the_sweeps_alias():
     assert METHODS["rodas4"] is rodas4
-    assert METHODS["rosenbrock"] is rodas4        # sweeps.accuracy.STIFF_METHOD
+    assert METHODS["rosenbrock"] is rodas4        # sweeps.spec.accuracy.STIFF_METHOD
     assert rodas4.ADAPTIVE and rodas4.ORDER == 4
 
 

@@ -66,7 +66,7 @@ def spec_file(tmp_path):
 
 
 class BlockGate:
-    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (sweeps.block_gate): a FIFO every block
+    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate): a FIFO every block
     computation takes a byte from before it starts. ``let(n)`` lets n more blocks start;
     ``open()`` lets every block start from now on. Held shut from creation."""
 
@@ -87,7 +87,7 @@ class BlockGate:
 @pytest.fixture
 def env(tmp_path):
     """The environment of the CLI processes a test starts: blocks counted in
-    ``blocks.log`` (sweeps.task, ``$DITHERLAB_BLOCK_LOG``)."""
+    ``blocks.log`` (sweeps.workers.task, ``$DITHERLAB_BLOCK_LOG``)."""
     return {**os.environ, "MPLBACKEND": "Agg", "DITHERLAB_BLOCK_LOG": str(tmp_path / "blocks.log")}
 
 
@@ -95,7 +95,7 @@ def env(tmp_path):
 def gate(tmp_path, env):
     """A shut :class:`BlockGate` in ``env`` (the test's ``env`` fixture): the processes
     started with ``env`` hold every block until the test lets it through."""
-    from sweeps.block_gate import GATE_ENV
+    from sweeps.workers.block_gate import GATE_ENV
 
     held = BlockGate(tmp_path / "block-gate")
     env[GATE_ENV] = str(held.path)

@@ -116,9 +116,9 @@ def check(case: Case, tmp: Path, index: int = 0, commands=("plan",)) -> dict:
     line over MAX_LINE, with a numpy repr or naming no (or not the mutated) field, over 1 s
     of CPU, an accepted spec that does not plan, and for each CLI ``commands`` an exit
     status other than 2, another first line, or anything written to the store."""
-    from sweeps.cube import empty_cube
+    from sweeps.run.new_cube import empty_cube
     from sweeps.errors import MAX_LINE
-    from sweeps.plan import make_plan
+    from sweeps.planning.plan import make_plan
     from sweeps.spec import SpecError, load_spec
 
     path = tmp / f"case{index}.{case.fmt}"

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 import store
-from sweeps import estimate as errors
-from sweeps.accuracy import PROMISE_OVERRIDES, TARGET_ERROR, promise
+from sweeps.estimates import error_estimate as errors
+from sweeps.spec.accuracy import PROMISE_OVERRIDES, TARGET_ERROR, promise
 
 from .conftest import ditherlab
 

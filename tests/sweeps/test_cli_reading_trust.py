@@ -126,7 +126,7 @@ def test_argument_refusals_are_one_line(argv, tmp_path):
 def test_plan_of_fewer_blocks_than_workers_is_not_shared_among_them():
     """One block is one worker's: a one-point sweep on two workers takes a whole point's
     time, not half of it (the estimate was n_points * per_point / workers)."""
-    from sweeps.calibrate import TASK_OVERHEAD_S, estimate
+    from sweeps.estimates.time_estimate import TASK_OVERHEAD_S, estimate
     from sweeps.spec import parse_spec
 
     one = tomllib.loads(SIMULATE_SPEC)

@@ -16,9 +16,9 @@ import pytest
 import xarray as xr
 
 import store
-from sweeps.cube import empty_cube
-from sweeps.plan import make_plan
-from sweeps.run import submit
+from sweeps.run.new_cube import empty_cube
+from sweeps.planning.plan import make_plan
+from sweeps.run.submit import submit
 from sweeps.spec import load_spec
 
 from ..guarantee import skip_unless_ci

@@ -1,4 +1,4 @@
-"""What the engine cannot run is refused at spec time (issue 10, sweeps.feasibility):
+"""What the engine cannot run is refused at spec time (issue 10, sweeps.spec.feasibility):
 unknown integrators, options an integrator ignores, explicit fixed steps outside the
 method's stability region, points certain to exhaust the step budget."""
 import math
@@ -6,9 +6,9 @@ import warnings
 
 import pytest
 
-from sweeps import stability
-from sweeps.accuracy import FIXED_H, FIXED_STEPS, RK4_WHERE, numerics
-from sweeps.plan import make_plan
+from sweeps.spec import fixed_step as stability
+from sweeps.spec.accuracy import FIXED_H, FIXED_STEPS, RK4_WHERE, numerics
+from sweeps.planning.plan import make_plan
 from sweeps.spec import SpecError, SpecWarning, parse_spec
 
 # the Sec. 7 scene (specs/fig14.toml) at the point of issue 10: W = 1, omega = 3000
@@ -158,7 +158,7 @@ def test_level_defaults_unaffected(dither, level):
 
 
 def test_levels_never_checked_for_stability():
-    """A level is the calibrated choice (sweeps.accuracy); only explicit numerics are
+    """A level is the calibrated choice (sweeps.spec.accuracy); only explicit numerics are
     held to the bound here."""
     s = parse_spec({**SEC7, "accuracy": "draft"})
     g = stability.grid_summary(s)

@@ -5,9 +5,9 @@ estimate's finer re-runs counted ``k/N``, then publishing the cube; it no longer
 through (tqdm redraws with a carriage return), not on their timing."""
 import re
 
-from sweeps.plan import make_plan
-from sweeps.run import submit
-from sweeps.run_estimate import SampleRuns
+from sweeps.planning.plan import make_plan
+from sweeps.run.submit import submit
+from sweeps.estimates.error_reruns import SampleRuns
 from sweeps.spec import parse_spec
 
 # 8 points in 4 blocks of 2: a few seconds once the kernel is in the disk cache

@@ -1,4 +1,4 @@
-"""Adaptive refinement of map boundaries (issue 11, sweeps.refine): a synthetic class with a
+"""Adaptive refinement of map boundaries (issue 11, sweeps.planning.refine): a synthetic class with a
 known boundary is recovered exactly; on real maps the refined and the full cube agree cell
 for cell; a refined sweep killed part-way resumes to the same cube."""
 from __future__ import annotations
@@ -15,7 +15,7 @@ import pytest
 
 import store
 import sweeps
-from sweeps.refine import Refinement, default_stride
+from sweeps.planning.refine import Refinement, default_stride
 
 from .conftest import BIN
 from .test_cluster_and_resume import assert_same_results, results
@@ -37,7 +37,7 @@ def test_a_known_boundary_is_recovered_exactly(n):
     """Stick-slip below the line omega_c = 300 W (the scaling Fig. 14 suggests) on a
     (W, omega) plane, two v_ref slices with different slopes: every cell's class is
     recovered, and only a band along the boundary is computed: the points on cell edges
-    whose ends agree are inferred (sweeps.refine), which halves the share of whole-cell
+    whose ends agree are inferred (sweeps.planning.refine), which halves the share of whole-cell
     refinement (measured there: 23 / 12 / 7.5 % for n = 31 / 61 / 100)."""
     W, omega = np.linspace(0, 3, n), np.geomspace(10, 1000, n)
     truth = np.zeros((n, n, 2, 1))

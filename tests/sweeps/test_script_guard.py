@@ -33,7 +33,7 @@ def test_unguarded_script_is_refused_in_one_line(tmp_path):
         """)
     assert out.returncode != 0 and "STATE" not in out.stdout
     assert "calls run_sweep at its top level: put the call under" in out.stderr
-    assert out.stderr.strip().splitlines()[-1].startswith("sweeps.cluster.ClusterStartError")
+    assert out.stderr.strip().splitlines()[-1].startswith("sweeps.workers.cluster.ClusterStartError")
 
 
 def test_guarded_script_runs(tmp_path):

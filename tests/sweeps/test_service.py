@@ -4,11 +4,11 @@ stops queued and running sweeps, a ``serve`` killed with SIGKILL reads ``stalled
 resumed, two submitters of one spec compute every block exactly once, and ``partial`` (some
 points failed) is told apart from ``failed`` (the run crashed).
 
-Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.task.compute_block
+Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.workers.task.compute_block
 appends one line per computed block, in whichever process computes it) and held back with
-``$DITHERLAB_BLOCK_GATE`` (sweeps.block_gate; the ``gate`` fixture): a test stops a sweep,
-or starts a second submitter, while blocks are certainly still to run, and lets them go
-after it has seen the stop or the attach happen (no timing luck)."""
+``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate; the ``gate`` fixture): a test stops a
+sweep, or starts a second submitter, while blocks are certainly still to run, and lets them
+go after it has seen the stop or the attach happen (no timing luck)."""
 import collections
 import os
 import signal
@@ -23,8 +23,8 @@ import xarray as xr
 import store
 from sweeps import make_plan
 from sweeps.spec import load_spec
-from sweeps.task import block_key
-from sweeps.task import compute_block as REAL_COMPUTE_BLOCK
+from sweeps.workers.task import block_key
+from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
@@ -357,7 +357,7 @@ def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, 
 # --- states: partial (some points failed) is not failed (the run crashed) -------------
 
 def _fake_runs(monkeypatch, how):
-    import sweeps.task as T
+    import sweeps.workers.task as T
 
     real = REAL_COMPUTE_BLOCK
 
@@ -418,7 +418,7 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
         tmp_path, monkeypatch):
     """If another process takes the lease over (it judged this one dead), this runner
     submits no further block and does not overwrite the new holder's row."""
-    import sweeps.task as T
+    import sweeps.workers.task as T
     from sweeps import parse_spec, submit
 
     plan = make_plan(parse_spec(SMALL_AVG))

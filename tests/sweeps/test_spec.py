@@ -3,7 +3,7 @@ and what is allowed; the sweep id hashes results-changing content only."""
 import numpy as np
 import pytest
 
-from sweeps import grid
+from sweeps.spec import grid
 from sweeps.spec import SpecError, load_spec, parse_spec
 
 BASE = {"name": "t", "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 4}, "omega": [100.0]}}

@@ -18,10 +18,10 @@ import numpy as np
 from engine import params as P
 from engine.scene import Scene
 
-from . import grid
-from .accuracy import Numerics, numerics
-from .outputs import resolve_outputs
-from .spec_models import Spec
+from ..spec import grid
+from ..spec.accuracy import Numerics, numerics
+from ..spec.methods import resolve_outputs
+from ..spec.models import Spec
 
 # Points per block when the spec does not say: about MIN_BLOCKS blocks, clamped to
 # [lo, hi] points. Each block costs ~7 ms of scheduling and journaling beside its compute
@@ -52,7 +52,7 @@ class Plan:
     outputs: tuple[str, ...]
     coords: dict[str, np.ndarray]
     blocks: list[np.ndarray] = field(repr=False)
-    refinement: object = field(default=None, repr=False)   # sweeps.refine (refined sweeps)
+    refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
@@ -81,17 +81,6 @@ class Plan:
     def block_points(self, b: int) -> np.ndarray:
         """The ``(k, 4)`` grid points of block ``b`` (columns W, omega, v_ref, vd)."""
         return self.points[self.blocks[b]]
-
-
-def base_params(spec: Spec) -> np.ndarray:
-    """The parameter vector of the spec's non-swept values (system defaults elsewhere)."""
-    values = {name: value for name, value in spec.params.model_dump().items()
-              if name != "slow_force" and value is not None}
-    values["slow_a"] = spec.params.slow_force.amplitude
-    values["slow_omega"] = spec.params.slow_force.omega
-    values["t_end"] = spec.time.t_end
-    values["t_transient"] = spec.time.t_transient
-    return P.pack(grid.system_defaults(spec.system), **values)
 
 
 def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
@@ -137,7 +126,7 @@ def point_costs(spec: Spec, coords: dict[str, np.ndarray]) -> np.ndarray:
 
 def make_plan(spec: Spec, level: str | None = None) -> Plan:
     """Plan ``spec`` (at its own accuracy, or at ``level`` for estimates)."""
-    p = base_params(spec)
+    p = grid.base_params(spec)
     num = numerics(spec, float(p[P.SIGMA0]), level)
     outputs = resolve_outputs(spec.method, spec.outputs)
     coords = grid.coords(spec)
@@ -149,7 +138,7 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
         seconds = point_costs(spec, coords).sum() * spec.time.t_end * SECONDS_PER_RADIAN
         n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
-        blocks = []   # known level by level (sweeps.run_refined)
+        blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
         blocks = balanced_blocks(point_costs(spec, coords), n_blocks)
     else:

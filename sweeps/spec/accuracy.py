@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 from engine.settings import Settings
 
-from .spec_models import ExplicitAccuracy, Spec
+from .models import ExplicitAccuracy, Spec
 
 # error each level promises in the queried outputs (relative; absolute for time fractions)
 TARGET_ERROR = {"draft": 1e-2, "standard": 1e-4, "reference": 1e-7}
@@ -109,7 +109,7 @@ def promise(level: str, output: str, friction: str | None = None) -> float:
 
 def needs_phase_accuracy(spec: Spec) -> bool:
     """True when the spec asks for a share that hinges on the sliding gap (PHASE_LEVELS)."""
-    from .outputs import resolve_outputs
+    from .methods import resolve_outputs
 
     return (spec.method == "simulate" and spec.friction == "elastoplastic"
             and any(o in PHASE_OUTPUTS for o in resolve_outputs(spec.method, spec.outputs)))

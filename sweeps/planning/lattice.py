@@ -1,4 +1,4 @@
-"""Lattices of a refined map plane (sweeps.refine): the points of an axis interval at a
+"""Lattices of a refined map plane (sweeps.planning.refine): the points of an axis interval at a
 step, and a level's split cells with their new points, vectorised over cells."""
 from __future__ import annotations
 

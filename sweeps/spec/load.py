@@ -16,14 +16,14 @@ Validation cannot be fooled, made slow or crashed (issues 9 and 10):
 - the grid's size is the product of the axis lengths read from the spec's fields, checked
   against the point budget *before* any axis is built (O(1) memory whatever ``num`` is);
 - an axis may not repeat a value (a cube coordinate must be unique);
-- every echoed value is cut to about :data:`sweeps.spec_messages.ECHO_CHARS` characters and
+- every echoed value is cut to about :data:`sweeps.spec.messages.ECHO_CHARS` characters and
   shown as plain Python (never ``np.float64(...)``); at most :data:`MAX_PROBLEMS` lines per refusal;
-- what the engine cannot run is refused here too (:mod:`sweeps.feasibility`): an unknown
+- what the engine cannot run is refused here too (:mod:`sweeps.spec.feasibility`): an unknown
   integrator, options the chosen integrator ignores, an explicit fixed step outside its
   method's stability region, a point certain to exhaust the step budget.
 
-The models are :mod:`sweeps.spec_models`, the wording of faults :mod:`sweeps.spec_messages`,
-the checks of choices and axis values :mod:`sweeps.spec_checks`; this module loads and
+The models are :mod:`sweeps.spec.models`, the wording of faults :mod:`sweeps.spec.messages`,
+the checks of choices and axis values :mod:`sweeps.spec.checks`; this module loads and
 parses.
 """
 from __future__ import annotations
@@ -37,11 +37,11 @@ import tomllib
 from pydantic import ValidationError
 
 from . import feasibility
-from .errors import MAX_LINE, MAX_PROBLEMS, SpecError  # noqa: F401  (re-exported)
+from ..errors import MAX_LINE, MAX_PROBLEMS, SpecError  # noqa: F401  (re-exported)
 from .grid import axis_size
-from .spec_checks import check_choices, check_grid
-from .spec_messages import format_error, format_loc, show
-from .spec_models import AXES, MAX_AXIS_POINTS, Spec
+from .checks import check_choices, check_grid
+from .messages import format_error, format_loc, show
+from .models import AXES, MAX_AXIS_POINTS, Spec
 
 DEFAULT_MAX_POINTS = 250_000
 MAX_DEPTH = 16                    # nesting of tables and lists (a spec needs 3)
@@ -97,7 +97,7 @@ def parse_spec(data: dict, *, max_points: int = DEFAULT_MAX_POINTS) -> Spec:
     Order: plain data of bounded depth (:func:`_plain`); pydantic (types, ranges, keys);
     the grid's size from the spec's fields against ``max_points`` (no axis is built
     before this); then what needs the axis values and the engine
-    (:mod:`sweeps.spec_checks`, :func:`sweeps.feasibility.check`). Warnings (a point that
+    (:mod:`sweeps.spec.checks`, :func:`sweeps.spec.feasibility.check`). Warnings (a point that
     may exhaust its step budget) go through :mod:`warnings` as :class:`SpecWarning`.
     """
     if not isinstance(data, dict):

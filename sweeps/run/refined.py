@@ -1,4 +1,4 @@
-"""Running a refined sweep (``refine = true``; sweeps.refine): level after level through the
+"""Running a refined sweep (``refine = true``; sweeps.planning.refine): level after level through the
 same blocks, journal, lease and dask dispatch as an exhaustive sweep.
 
 A refined plan starts with no blocks. :func:`replay` rebuilds the refinement from what the
@@ -20,11 +20,12 @@ import numpy as np
 import store
 from engine import status as S
 
-from .cluster import dask_client
+from ..workers.cluster import dask_client
+from . import phases
 from .dispatch import run_blocks, run_blocks_local
-from .plan import Plan, balanced_blocks, point_costs
-from .refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
-from .run_estimate import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
+from ..planning.plan import Plan, balanced_blocks, point_costs
+from ..planning.refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
+from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
 
 BLOCK_POINTS = {"simulate": 8, "averaged": 4096}   # points per block of a level (at most)
 
@@ -59,7 +60,7 @@ def _advance(plan: Plan, cube) -> list[int]:
 
 
 def _cut(plan: Plan, index: np.ndarray) -> list[np.ndarray]:
-    """A level's points in blocks of balanced estimated cost (sweeps.plan), at least two
+    """A level's points in blocks of balanced estimated cost (sweeps.planning.plan), at least two
     (both workers busy)."""
     n_blocks = max(math.ceil(index.size / BLOCK_POINTS[plan.path]), min(index.size, 2))
     cost = point_costs(plan.spec, plan.coords)[index]
@@ -67,7 +68,7 @@ def _cut(plan: Plan, index: np.ndarray) -> list[np.ndarray]:
 
 
 def infer(plan: Plan, cube) -> None:
-    """Fill every point not computed from its source (sweeps.refine) and set provenance."""
+    """Fill every point not computed from its source (sweeps.planning.refine) and set provenance."""
     src = plan.refinement.sources()
     asked = plan.refinement.asked
     plan.sources = src
@@ -87,7 +88,7 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
         client=None, dashboard=None, warm_up: bool = True) -> None:
     """Compute ``todo`` (the first unfinished level's blocks), then every further level,
     infer the rest, and (simulate) estimate the error on computed points: its finer re-runs
-    run where a worker would idle at a level's tail (sweeps.dispatch ``filler``)."""
+    run where a worker would idle at a level's tail (sweeps.run.dispatch ``filler``)."""
     simulate = plan.path == "simulate"
     own = simulate and client is None
     t = time.perf_counter()
@@ -111,6 +112,7 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
             todo, level = _advance(plan, sink.cube), level + 1
         timings["compute_s"] = time.perf_counter() - t
         if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-            estimate_into(plan, c, sink, timings, started=early, progress=progress)
+            estimate_into(plan, c, sink.cube, sink.sweep, timings, started=early,
+                          display=phases.display(plan, progress))
         elif early is not None:
             early.cancel(c)

@@ -7,10 +7,9 @@ from __future__ import annotations
 import numpy as np
 
 from .grid import axis_values, system_defaults
-from .outputs import allowed_outputs, resolve_outputs
-from .refine import CLASS_OUTPUT, PLANES
-from .spec_messages import show
-from .spec_models import AXES, Range, Spec
+from .methods import CLASS_OUTPUT, PLANES, allowed_outputs, resolve_outputs
+from .messages import show
+from .models import AXES, Range, Spec
 
 
 def check_choices(spec: Spec) -> list[str]:
@@ -51,7 +50,7 @@ def check_choices(spec: Spec) -> list[str]:
 
 
 def _check_refine(spec: Spec) -> list[str]:
-    """Refinement needs a class to refine on (sweeps.refine.CLASS_OUTPUT)."""
+    """Refinement needs a class to refine on (sweeps.spec.methods.CLASS_OUTPUT)."""
     if spec.method not in CLASS_OUTPUT:
         return [f"refine: the {spec.method} path draws no zone map or stability chart; "
                 "drop refine"]

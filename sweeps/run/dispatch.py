@@ -1,17 +1,18 @@
 """Computing a run's blocks: on a dask cluster, one block per worker thread (plus one) in
 flight, after compiling the kernel on every worker (:func:`run_blocks`); or, for the
 analysis paths, which cost microseconds per point, in this process (:func:`run_blocks_local`).
-Finished blocks go to a :class:`sweeps.sink.BlockSink`, which also says when to stop."""
+Finished blocks go to a :class:`sweeps.run.sink.BlockSink`, which also says when to stop."""
 from __future__ import annotations
 
 import threading
 import time
 from contextlib import nullcontext
 
-from . import phases, task
-from .cluster import dask_client
-from .plan import Plan
-from .run_estimate import complete, estimate_into, needs_estimate
+from ..workers import task
+from ..workers.cluster import dask_client
+from ..planning.plan import Plan
+from ..estimates.error_reruns import complete, estimate_into, needs_estimate
+from . import phases
 from .sink import BlockSink
 
 
@@ -19,7 +20,7 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
                progress, timings, client=None, dashboard=None, filler=None,
                warm_up: bool = True) -> None:
     """Compute ``todo`` on the cluster. ``filler`` (e.g. a refined sweep's error sample,
-    sweeps.run_estimate.SampleRuns) gives tasks to run where a worker would otherwise
+    sweeps.estimates.error_reruns.SampleRuns) gives tasks to run where a worker would otherwise
     idle: once no block is left to submit, while fewer tasks than threads are running.
     ``warm_up=False`` skips compiling the kernel on the workers (done by an earlier call on
     the same client: ``client.run`` would wait for the filler tasks still running)."""
@@ -40,7 +41,8 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
         bar.close()   # the points are done: say so before the next phase
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink, timings, progress=progress)
+            estimate_into(plan, client, sink.cube, sink.sweep, timings,
+                          display=phases.display(plan, progress))
 
 
 def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
@@ -120,6 +122,6 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
 
 
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
-    """Progress in points (blocks are small and cost-balanced: sweeps.plan), with tqdm's
+    """Progress in points (blocks are small and cost-balanced: sweeps.planning.plan), with tqdm's
     rate and ETA."""
     return phases.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point", enabled)

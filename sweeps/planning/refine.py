@@ -36,11 +36,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..spec.grid import AXES
+from ..spec.methods import CLASS_OUTPUT, PLANES  # noqa: F401  (CLASS_OUTPUT: re-exported)
 from .lattice import lattice, split
 
-AXES = ("W", "omega", "v_ref", "v_d")
-PLANES = {"simulate": ("W", "omega"), "averaged": ("W", "v_ref")}
-CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
 # a continuous quantity whose sign is the class: a cell whose corners agree is still split
 # when the quantity varies across it by more than its least distance from 0 (a sign change,
 # e.g. a small unstable island, may hide inside)

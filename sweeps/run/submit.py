@@ -9,10 +9,10 @@ rename), so a submitter killed at any instant loses at most the blocks in flight
 cube is republished every few blocks and at the end. A resubmitted spec computes only
 the blocks missing from the journal.
 
-The pieces: the worker's task (sweeps.task), the cluster (sweeps.cluster), the empty cube
-of a plan (sweeps.cube), the sink of finished blocks (sweeps.sink), their dispatch
-(sweeps.dispatch), the error estimate (sweeps.run_estimate) and how a run ends
-(sweeps.outcome). This module holds :func:`submit`, which puts them together under the
+The pieces: the worker's task (sweeps.workers.task), the cluster (sweeps.workers.cluster), the empty cube
+of a plan (sweeps.run.new_cube), the sink of finished blocks (sweeps.run.sink), their dispatch
+(sweeps.run.dispatch), the error estimate (sweeps.estimates.error_reruns) and how a run ends
+(sweeps.run.outcome). This module holds :func:`submit`, which puts them together under the
 sweep's lease.
 """
 from __future__ import annotations
@@ -28,17 +28,19 @@ import store
 from engine import status as S
 from store.catalogue_db import FINAL
 
-from . import history, phases, task
-from .cluster import EarlyStart
-from .cube import empty_cube
+from ..estimates import time_history as history
+from ..workers import task
+from ..workers.cluster import EarlyStart
+from . import phases
+from .new_cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
-from .lease import LEASE_LOST, Lease
+from .lease_holder import LEASE_LOST, Lease
 from .outcome import SubmitResult, abort, attached_result, final_result
-from .plan import Plan
+from ..planning.plan import Plan
 from .progress import attach
-from .run_estimate import attach_saved_estimate, needs_estimate
+from ..estimates.error_reruns import attach_saved_estimate, needs_estimate
 from .sink import BlockSink
-from .version import results_fingerprint
+from ..version import results_fingerprint
 
 log = logging.getLogger("ditherlab")
 
@@ -46,9 +48,9 @@ log = logging.getLogger("ditherlab")
 def blocks_to_run(plan: Plan, cube) -> list[int]:
     """Blocks with a point whose status is not OK: never computed, or failed before
     (DESIGN.md §4: a resubmitted spec computes only the points whose status is not 0).
-    A refined sweep's blocks are known level by level: sweeps.run_refined.replay."""
+    A refined sweep's blocks are known level by level: sweeps.run.refined.replay."""
     if plan.spec.refine:
-        from .run_refined import replay
+        from .refined import replay
 
         return replay(plan, cube)
     status = cube["status"].values.ravel()
@@ -67,7 +69,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
 
     ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
     ``client`` is a dask client to use instead of starting a cluster (``dashboard``: the
-    address of a started LocalCluster's dashboard, see :func:`sweeps.cluster.dask_client`);
+    address of a started LocalCluster's dashboard, see :func:`sweeps.workers.cluster.dask_client`);
     ``owner`` the lease owner tag (default this process's ``host:pid``); ``stop`` a
     ``threading.Event`` that, once set, ends the run after its in-flight blocks and
     re-queues the sweep (serve).
@@ -126,7 +128,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         sink = BlockSink(plan, cube, journal, sweep, lease)
         run = run_blocks_local if in_process(plan, scheduler) else run_blocks
         if plan.spec.refine:
-            from .run_refined import run
+            from .refined import run
         if todo or needs_estimate(plan, sweep, cube):
             extra, t = {}, time.perf_counter()
             if early is not None:   # its workers are warm: the kernel compiled there
@@ -162,7 +164,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
 
 def in_process(plan: Plan, scheduler: str | None) -> bool:
     """The analysis paths cost microseconds a point: they run in this process, not on a
-    cluster (sweeps.dispatch.run_blocks_local), unless a scheduler is named."""
+    cluster (sweeps.run.dispatch.run_blocks_local), unless a scheduler is named."""
     return plan.path != "simulate" and scheduler is None
 
 
@@ -173,7 +175,7 @@ def _compiling() -> None:
 
 def _checked_blocks(plan: Plan):
     """The blocks the journal is checked against: a refined sweep's are not known before
-    its replay (sweeps.run_refined), so only checksums and index ranges are checked."""
+    its replay (sweeps.run.refined), so only checksums and index ranges are checked."""
     return None if plan.spec.refine else plan.blocks
 
 

@@ -1,5 +1,5 @@
 """The cube a plan fills: its coordinates, variables and attributes (the spec, versions,
-the engine's scene and parameters), every point NOT_COMPUTED at first (sweeps.run)."""
+the engine's scene and parameters), every point NOT_COMPUTED at first (sweeps.run.submit)."""
 from __future__ import annotations
 
 import sys
@@ -8,9 +8,9 @@ import time
 import store
 from engine import params as P
 
-from .outputs import output_attrs
-from .plan import Plan
-from .version import __version__, results_fingerprint
+from ..spec.methods import output_attrs
+from ..planning.plan import Plan
+from ..version import __version__, results_fingerprint
 
 
 def cube_attrs(plan: Plan) -> dict:

@@ -20,6 +20,14 @@ def bar(plan, phase: str, total: int, unit: str, enabled: bool):
                 disable=not enabled, mininterval=MININTERVAL_S, miniters=1)
 
 
+def display(plan, enabled: bool):
+    """``display(phase, total, unit) -> bar`` for a phase counted elsewhere (the error
+    estimate, sweeps.estimates), or None when progress is off."""
+    if not enabled:
+        return None
+    return lambda phase, total, unit: bar(plan, phase, total, unit, True)
+
+
 def say(plan, phase: str, enabled: bool) -> None:
     """One line naming a phase without a count (publishing the cube)."""
     if enabled:

@@ -4,7 +4,7 @@ After a sweep, a sample of its points is integrated again one accuracy level fin
 (draft -> standard -> reference -> reference with tolerances / 100; explicit numerics ->
 the same method with tolerances / 100 or 4x the steps) and the observed change per output
 is compared with what the sweep's level promises for that output
-(:func:`sweeps.accuracy.promise`: absolute for time fractions, relative otherwise; explicit
+(:func:`sweeps.spec.accuracy.promise`: absolute for time fractions, relative otherwise; explicit
 numerics are held to the ``standard`` promise). The result is stored in the cube's
 ``error_estimate`` attribute::
 
@@ -31,8 +31,8 @@ import numpy as np
 from engine import params as P
 from engine import status as S
 
-from .accuracy import FRACTION_OUTPUTS, Numerics, numerics, promise
-from .plan import Plan
+from ..spec.accuracy import FRACTION_OUTPUTS, Numerics, numerics, promise
+from ..planning.plan import Plan
 
 FINER = {"draft": "standard", "standard": "reference", "reference": None, "explicit": None}
 SAMPLE_SIZE = 12

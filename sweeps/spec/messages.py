@@ -1,6 +1,6 @@
 """How a refused spec is worded: every echoed value short and in plain Python
 (:func:`show`), and each pydantic fault as one line naming the field, the value received
-and what is allowed (:func:`format_error`; sweeps.spec)."""
+and what is allowed (:func:`format_error`; sweeps.spec.load)."""
 from __future__ import annotations
 
 import math

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import store
 
-from .lease import CANCELLED, LEASE_LOST, SHUTDOWN
+from .lease_holder import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
 
 log = logging.getLogger("ditherlab")

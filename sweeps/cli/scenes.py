@@ -1,5 +1,5 @@
-"""The gallery's command line (issue 12), hooked into ``ditherlab`` by
-``sweeps.cli.main._scene_hook``:
+"""The gallery's commands (issue 12), added to the ``ditherlab`` parser by
+``sweeps.cli.main.build_parser``:
 
     ditherlab scenes                                   # the named scenes
     ditherlab submit --scene fig14 [--size small|full] # also plan --scene, map --scene
@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from ..errors import EXIT_FAILED, RefusedError
-from .scenes import REGISTRY, SIZES, get_scene
+from ..gallery.scenes import REGISTRY, SIZES, get_scene
 
 SCENE_COMMANDS = {"submit": "spec", "plan": "spec", "map": "sweep"}
 
@@ -70,7 +70,7 @@ def _scene_sweep(args, spec: dict) -> str:
     import sys
 
     from ..api import run_sweep
-    from .scenes import get_scene
+    from ..gallery.scenes import get_scene
 
     size = args.size or "full"
     if not args.quiet:   # a full-size map may mean many minutes of compute: say so first
@@ -96,8 +96,8 @@ def _map_picked(args) -> int:
 
     import store
 
-    from ..cli.reading import cmd_map, open_for_map, parse_sel, warn_inferred
-    from .scenes import shrink
+    from .reading import cmd_map, open_for_map, parse_sel, warn_inferred
+    from ..gallery.scenes import shrink
 
     if args.kind != "friction" and args.pick is not None:
         raise RefusedError(f"--pick applies to --kind friction only (curves of W), not to "
@@ -141,8 +141,8 @@ def cmd_scenes(args) -> int:
 def cmd_gallery(args) -> int:
     import time
 
-    from .build import FIGURES, build
-    from .context import Context
+    from ..gallery.build import FIGURES, build
+    from ..gallery.context import Context
 
     unknown = sorted(set(args.only or ()) - set(FIGURES))
     if unknown:

@@ -1,5 +1,5 @@
 """Dask clusters for a run: a client on an existing scheduler or a LocalCluster, with its
-workers ignoring Ctrl-C (the submitter stops them cleanly; sweeps.run)."""
+workers ignoring Ctrl-C (the submitter stops them cleanly; sweeps.run.submit)."""
 from __future__ import annotations
 
 import logging
@@ -66,7 +66,7 @@ class EarlyStart:
     Made on the main thread once the sweep's lease is taken. SIGINT is ignored until the
     workers are up and the submitter asks for the client, so they are born ignoring it (as
     with :func:`dask_client`); a Ctrl-C in those one or two seconds is dropped. ``warm`` is
-    ``(fn, *args)``, run on every worker once they are up (sweeps.task.warm_up)."""
+    ``(fn, *args)``, run on every worker once they are up (sweeps.workers.task.warm_up)."""
 
     def __init__(self, workers: int, dashboard: str | None, warm: tuple):
         self._cm = dask_client(None, workers, dashboard)

@@ -1,7 +1,7 @@
 """A gate the tests hold blocks back with (diagnostics, like ``$DITHERLAB_BLOCK_LOG``).
 
 With ``$DITHERLAB_BLOCK_GATE`` naming a FIFO (``os.mkfifo``), every block computation
-(:func:`sweeps.task.compute_block`, in whichever process runs it) takes one byte from it
+(:func:`sweeps.workers.task.compute_block`, in whichever process runs it) takes one byte from it
 before it starts, and waits while there is none: the test holding the FIFO's write end lets
 exactly as many blocks through as it writes bytes, and closing it opens the gate for good.
 So a test can stop a sweep, or start a second submitter, while blocks are certainly still

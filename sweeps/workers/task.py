@@ -1,7 +1,7 @@
 """The task a dask worker runs: one block of points through the engine.
 
 :func:`compute_block` never raises (a crash of the engine marks its block FAILED) and
-returns arrays only; workers never touch files (sweeps.run). :func:`warm_up` compiles the
+returns arrays only; workers never touch files (sweeps.run.submit). :func:`warm_up` compiles the
 block kernel once per worker. With ``$DITHERLAB_BLOCK_LOG`` set every computed block is
 noted in that file (:func:`block_key`), which is how the tests count block computations
 across processes.
@@ -35,7 +35,7 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
     """
     from engine.batch import run_block
 
-    if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.block_gate)
+    if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
         pass_gate(os.environ[GATE_ENV])
     if os.environ.get(BLOCK_LOG_ENV):
         _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))

@@ -13,7 +13,7 @@ import numpy as np
 
 from engine import params as P
 
-from .spec_models import AXES, Range, Spec
+from .models import AXES, Range, Spec
 
 # the engine parameter each cube axis overrides
 AXIS_PARAM = {"W": "W", "omega": "omega", "v_ref": "v_ref", "v_d": "vd"}
@@ -21,6 +21,17 @@ AXIS_PARAM = {"W": "W", "omega": "omega", "v_ref": "v_ref", "v_d": "vd"}
 
 def system_defaults(system: str) -> dict:
     return P.CONTACT_DEFAULTS if system == "contact" else P.PAPER_DEFAULTS
+
+
+def base_params(spec: Spec) -> np.ndarray:
+    """The parameter vector of the spec's non-swept values (system defaults elsewhere)."""
+    values = {name: value for name, value in spec.params.model_dump().items()
+              if name != "slow_force" and value is not None}
+    values["slow_a"] = spec.params.slow_force.amplitude
+    values["slow_omega"] = spec.params.slow_force.omega
+    values["t_end"] = spec.time.t_end
+    values["t_transient"] = spec.time.t_transient
+    return P.pack(system_defaults(spec.system), **values)
 
 
 def default_axis(spec: Spec, axis: str) -> list[float]:

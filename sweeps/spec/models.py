@@ -5,7 +5,7 @@ the spec's canonical form and hash, the sweep id (DESIGN.md §3).
 Types are strict (no ``"100"`` for 100, no ``true`` for 1; an int is fine where a float is
 expected) and NaN and infinities are refused everywhere. Loading a spec and wording its
 faults is :mod:`sweeps.spec`; checks that need the grid's values or the engine are
-:mod:`sweeps.spec_checks` and :mod:`sweeps.feasibility`.
+:mod:`sweeps.spec.checks` and :mod:`sweeps.spec.feasibility`.
 """
 from __future__ import annotations
 
@@ -26,8 +26,8 @@ from pydantic import (
     model_validator,
 )
 
-from .spec_messages import show
-from .version import __version__
+from .messages import show
+from ..version import __version__
 
 SYSTEMS = ("slider", "contact")
 FRICTIONS = ("coulomb", "stribeck", "lugre", "elastoplastic")
@@ -143,7 +143,7 @@ class ExplicitAccuracy(_Strict):
     An adaptive method (``dopri5``, ``rodas4`` alias ``rosenbrock``) takes ``rtol``,
     ``atol`` and ``atol_units``; the fixed-step ``rk4`` takes ``steps_per_period`` (with
     dither) or ``step`` (without). An option the method would ignore is refused, and so is
-    a fixed step outside the method's stability region (:mod:`sweeps.feasibility`).
+    a fixed step outside the method's stability region (:mod:`sweeps.spec.feasibility`).
     """
 
     integrator: str = "dopri5"
@@ -181,9 +181,9 @@ class ExplicitAccuracy(_Strict):
 
 
 class Refine(_Strict):
-    """Adaptive refinement of the map's class boundary (sweeps.refine): ``coarse`` is the
+    """Adaptive refinement of the map's class boundary (sweeps.planning.refine): ``coarse`` is the
     stride of the first lattice (a power of two; default about 4 lattice steps per axis of a
-    zone map, 8 of a stability chart: sweeps.refine.FIRST_STEPS)."""
+    zone map, 8 of a stability chart: sweeps.planning.refine.FIRST_STEPS)."""
 
     coarse: Annotated[int, Field(ge=1, le=1 << 20)] | None = None
 
@@ -245,7 +245,7 @@ class Spec(_Strict):
         results fingerprint (sweeps.version: a hash of the engine sources and of the
         planning modules that pick levels and tolerances), so a cube made by another
         engine or another level table is never found as this spec's result."""
-        from .version import results_fingerprint
+        from ..version import results_fingerprint
 
         blob = json.dumps({"spec": self.canonical(), "engine": __version__,
                            "engine_fingerprint": results_fingerprint()},

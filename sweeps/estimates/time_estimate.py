@@ -15,10 +15,10 @@ import numpy as np
 
 from engine import params as P
 
-from . import grid
-from .plan import Plan, make_plan
-from .spec_models import LEVELS, Spec
-from .task import compute_block, warm_up
+from ..spec import grid
+from ..planning.plan import Plan, make_plan
+from ..spec.models import LEVELS, Spec
+from ..workers.task import compute_block, warm_up
 
 CAL_WINDOW = 5.0      # time units integrated per calibration point
 MAX_SAMPLES = 5

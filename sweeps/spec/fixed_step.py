@@ -1,9 +1,9 @@
-"""The stability of an explicit fixed step (check 2 of :mod:`sweeps.feasibility`): the
+"""The stability of an explicit fixed step (check 2 of :mod:`sweeps.spec.feasibility`): the
 stability region of a Runge-Kutta method from its Butcher tableau (:func:`reach`), the
 scene's eigenvalue estimates over the grid (:func:`rates`), and the few facts of the grid
 every feasibility check needs (:class:`Grid`: extremes, the effective dither, parameters;
 :func:`dither_periods`). The equations and the measurements behind them are in the docstring of
-:mod:`sweeps.feasibility`.
+:mod:`sweeps.spec.feasibility`.
 """
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import numpy as np
 from engine import params as P
 
 from . import grid
-from .spec_models import ExplicitAccuracy, is_adaptive
+from .models import ExplicitAccuracy, is_adaptive
 
 SINES = ("sine-velocity", "sine-force")
 BRISTLE_LAWS = ("lugre", "elastoplastic")
@@ -99,14 +99,12 @@ class Grid:
 
 def grid_summary(spec) -> Grid:
     """The :class:`Grid` of ``spec`` (its axes are built: call after the point budget)."""
-    from .plan import base_params
-
     W = grid.axis_values(spec, "W")
     omega = grid.axis_values(spec, "omega")
     v_ref = grid.axis_values(spec, "v_ref")
     dither = spec.dither if spec.dither != "none" and W.any() else "none"
     return Grid(dither, float(np.abs(W).max()), float(np.abs(v_ref).max()),
-                float(omega.min()), float(omega.max()), base_params(spec))
+                float(omega.min()), float(omega.max()), grid.base_params(spec))
 
 
 def rates(spec, g: Grid) -> list[Rate]:

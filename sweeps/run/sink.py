@@ -11,8 +11,8 @@ import numpy as np
 import store
 from engine import status as S
 
-from .lease import LEASE_LOST
-from .plan import Plan
+from .lease_holder import LEASE_LOST
+from ..planning.plan import Plan
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running ...
 PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time on it: the
@@ -36,7 +36,7 @@ class BlockSink:
         self.last_publish, self.publish_s = time.monotonic(), 0.0
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
-        self.stopped: str | None = None              # sweeps.lease.CANCELLED / SHUTDOWN / ...
+        self.stopped: str | None = None              # sweeps.run.lease_holder.CANCELLED / SHUTDOWN / ...
         self._report(force=True)
 
     def __call__(self, b: int, result: dict) -> None:

@@ -1,6 +1,7 @@
-"""The error estimate of a finished simulated run (sweeps.estimate): the error sample
-re-run one accuracy level finer on the cluster, compared, attached to the cube and saved
-beside it as ``<sweep>/error_estimate.json``, so that no cube goes unchecked."""
+"""Running the error estimate of a finished simulated run (sweeps.estimates.error_estimate):
+the error sample re-run one accuracy level finer on the dask client, compared, attached to
+the cube and saved beside it as ``<sweep>/error_estimate.json``, so that no cube goes
+unchecked."""
 from __future__ import annotations
 
 import json
@@ -11,42 +12,42 @@ import numpy as np
 
 from engine import status as S
 
-from . import estimate as errest
-from . import phases, task
-from .plan import Plan
-from .sink import BlockSink
+from . import error_estimate as errest
+from ..workers import task
+from ..planning.plan import Plan
 
-ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (sweeps.estimate)
+ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
 
 
-def estimate_into(plan: Plan, client, sink: BlockSink, timings: dict, started=None,
-                  progress: bool = False) -> None:
-    """The error estimate (sweeps.estimate) of a finished simulated sweep, into its cube
-    and ``<sweep>/error_estimate.json``; a failure is recorded as a warning, never lost.
-    ``started``: a :class:`SampleRuns` some of whose re-runs are already submitted;
-    ``progress``: count the re-runs as they finish (``error estimate k/N``)."""
+def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
+                  display=None) -> None:
+    """The error estimate of a finished simulated sweep, into its ``cube`` (in memory) and
+    ``<sweep>/error_estimate.json`` (``sweep``: its ``store.SweepDir``); a failure is
+    recorded as a warning, never lost. ``started``: a :class:`SampleRuns` some of whose
+    re-runs are already submitted; ``display(phase, total, unit)``: a progress bar that
+    counts the re-runs as they finish (sweeps.run.phases.bar), or None."""
     t = time.perf_counter()
     try:
-        estimate = _error_estimate(plan, client, sink.cube, started, progress)
+        estimate = _error_estimate(plan, client, cube, started, display)
     except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
         estimate = {"compared_with": None, "level": plan.numerics.label,
                     "sample_points": 0, "change": {}, "promise": {},
                     "warnings": [f"the error estimate could not be computed "
                                  f"({type(exc).__name__}: {exc}); submit again"]}
-    errest.attach(sink.cube, estimate)
+    errest.attach(cube, estimate)
     if estimate["compared_with"] is not None:
-        _write_json(sink.sweep.root / ESTIMATE_FILE, estimate)
+        _write_json(sweep.root / ESTIMATE_FILE, estimate)
     timings["error_estimate_s"] = time.perf_counter() - t
 
 
 class SampleRuns:
     """The error sample's re-runs one accuracy level finer, one task per point
-    (sweeps.estimate), costliest first, submitted one by one: a refined sweep hands them
+    (sweeps.estimates.error_estimate), costliest first, submitted one by one: a refined sweep hands them
     to the dispatch as filler for the workers idling at the tail of each level (its
-    sample is known before its first level ends: sweeps.estimate.sample)."""
+    sample is known before its first level ends: sweeps.estimates.error_estimate.sample)."""
 
     def __init__(self, plan: Plan):
-        from .plan import point_costs
+        from ..planning.plan import point_costs
 
         self.plan, self.finer = plan, errest.finer_numerics(plan)
         self.index, self.points = errest.sample(plan)
@@ -86,13 +87,16 @@ class SampleRuns:
 
 
 def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
-                    progress: bool = False) -> dict:
+                    display=None) -> dict:
     """Gather the finer re-runs of the error sample (all submitted now unless some were
     ``started``) and compare."""
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
-    with phases.bar(plan, "error estimate", len(runs.order), "re-run", progress) as bar:
-        parts = runs.gather(client, tick=bar.update)
+    if display is None:
+        parts = runs.gather(client)
+    else:
+        with display("error estimate", len(runs.order), "re-run") as bar:
+            parts = runs.gather(client, tick=bar.update)
     result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
               if k != "error"}
     return errest.compare(plan, cube, index, result, finer.label)

@@ -1,7 +1,13 @@
-"""Which outputs each analysis path can produce, and the default selection."""
+"""What each method (the spec's ``method``, the engine's path) produces: its outputs and the
+default selection, their cube attributes, and for a refined sweep (``refine = true``) the
+map plane and the class output the refinement follows (sweeps.planning.refine)."""
 from __future__ import annotations
 
 from engine import outputs as engine_outputs
+
+# the 2-D plane of a refined map, and the output whose value is the class on it
+PLANES = {"simulate": ("W", "omega"), "averaged": ("W", "v_ref")}
+CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
 
 
 def allowed_outputs(method: str) -> tuple[str, ...]:

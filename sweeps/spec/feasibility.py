@@ -9,7 +9,7 @@ ok and wrong numbers.
    divides each dither (half-)period into ``steps_per_period`` steps and ignores ``step``;
    without dither (``dither = "none"`` or ``W = 0`` everywhere) it takes ``step`` and
    ignores ``steps_per_period``. (rtol/atol for rk4, step/steps_per_period for adaptive
-   methods are refused by :class:`sweeps.spec_models.ExplicitAccuracy` itself.)
+   methods are refused by :class:`sweeps.spec.models.ExplicitAccuracy` itself.)
 
 2. **Stability of a fixed step.** On the linear test equation ``y' = lambda y`` a
    Runge-Kutta step multiplies ``y`` by ``R(h lambda)``, ``R(z) = 1 + z b^T (I - z A)^-1 1``
@@ -23,7 +23,7 @@ ok and wrong numbers.
    - the bristle relaxation of LuGre and elasto-plastic friction (Eq. 2.3 linearised in z
      for frozen u; engine.friction.lugre.rate): ``lambda = -sigma0 |u| / g(u)``, ``g >= fc``,
      ``|u| <= u_max``; slider ``u_max = 2 max|v_ref| + max W + |A|`` (the estimate of
-     :func:`sweeps.accuracy.rk4_fits` plus the slow force of amplitude ``A``, which on the
+     :func:`sweeps.spec.accuracy.rk4_fits` plus the slow force of amplitude ``A``, which on the
      unit spring-mass drives the slider up to about ``A``: max|v| = 1.50 measured on the
      Sec. 7 scene, v_ref = 0.1, A = 1.7, no dither), contact ``u_max = max|v_ref| + max W``
      (prescribed). Measured on the Sec. 7 scene (W = 3, omega = 10, sine, t_end = 100):
@@ -55,7 +55,7 @@ ok and wrong numbers.
    standard); past :data:`WARN_STEPS_PER_PERIOD` x periods the spec is accepted with a
    warning.
 
-Check 2 (the stability region, the scene's rates) is :mod:`sweeps.stability`; this module
+Check 2 (the stability region, the scene's rates) is :mod:`sweeps.spec.fixed_step`; this module
 holds checks 1 and 3 and :func:`check`, which runs them all.
 """
 from __future__ import annotations
@@ -64,8 +64,8 @@ import math
 
 from engine import params as P
 
-from .spec_models import ExplicitAccuracy, is_adaptive
-from .stability import Grid, dither_periods, grid_summary, stability_faults
+from .models import ExplicitAccuracy, is_adaptive
+from .fixed_step import Grid, dither_periods, grid_summary, stability_faults
 
 # an adaptive method takes about this many steps per sine period at least (DP5, Sec. 7
 # scene, W = 0.1-3, omega = 1e3-3e4: 4.5-16 at draft, 15-53 at standard): past the budget
