@@ -13,6 +13,7 @@ from ..workers.cluster import dask_client
 from ..workers.matching import matched
 from ..planning.plan import Plan
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
+from . import phases
 from .sink import BlockSink
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
@@ -41,10 +42,11 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
             sink.started()
             _dispatch(client, plan, todo, sink, bar, filler)
         timings["compute_s"] = time.perf_counter() - t
+        bar.close()   # the points are done: say so before the next phase
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink.cube, sink.sweep, timings)
-    bar.close()
+            estimate_into(plan, client, sink.cube, sink.sweep, timings,
+                          display=phases.display(plan, progress))
 
 
 def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
@@ -151,8 +153,4 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
     """Progress in points (blocks are small and cost-balanced: sweeps.planning.plan), with tqdm's
     rate and ETA."""
-    from tqdm import tqdm
-
-    return tqdm(total=sum(len(plan.blocks[b]) for b in todo), unit="point",
-                desc=f"{plan.spec.name} [{plan.sweep_id}]", disable=not enabled,
-                mininterval=0.5)
+    return phases.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point", enabled)

@@ -31,6 +31,7 @@ from store.catalogue_db import FINAL
 from ..estimates import time_history as history
 from ..workers import task
 from ..workers.cluster import EarlyStart
+from . import phases
 from .new_cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
 from .lease_holder import LEASE_LOST, Lease
@@ -115,6 +116,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and (todo or needs_estimate(plan, sweep, cube)) else None
+    if early is not None:
+        phases.say(plan, f"starting a local cluster of {workers} workers", progress)
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
@@ -144,7 +147,10 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
             if early is not None:
                 timings["cluster_s"] = waited
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
+            phases.say(plan, "publishing the cube", progress)
             store.publish(cube, sweep.cube)
+        if early is not None:
+            phases.say(plan, "stopping the local cluster", progress)
     except BaseException as exc:
         abort(plan, sink, lease, exc, serving=stop is not None)
         raise

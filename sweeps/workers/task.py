@@ -17,13 +17,14 @@ import numpy as np
 from engine import params as P
 from engine import status as S
 
+from .block_gate import GATE_ENV, pass_gate
+
 COUNTERS = ("status", "cost_s", "steps", "evals")
 META = ("error", "fingerprint")   # keys of a block's result that are not per-point arrays
 
 log = logging.getLogger("ditherlab")
 
 BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed block is noted in
-BLOCK_GATE_ENV = "DITHERLAB_BLOCK_GATE"  # tests: a folder of tickets, one taken per block
 
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
@@ -37,8 +38,8 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
     """
     from engine.batch import run_block
 
-    if os.environ.get(BLOCK_GATE_ENV):
-        _pass_gate(os.environ[BLOCK_GATE_ENV])
+    if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
+        pass_gate(os.environ[GATE_ENV])
     if os.environ.get(BLOCK_LOG_ENV):
         _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))
     try:
@@ -85,24 +86,6 @@ def _note_block(path: str, key: str) -> None:
         os.write(fd, line)   # one short O_APPEND write: lines of processes never interleave
     finally:
         os.close(fd)
-
-
-def _pass_gate(folder: str) -> None:
-    """Wait for a ticket (a file ``ticket*`` in ``folder``, taken by removing it) or for
-    ``folder/open``: how a test holds blocks at a known point (a batch job killed while
-    blocks remain), with no timing luck. A waiting process shows in ``waiting-<pid>``."""
-    waiting = os.path.join(folder, f"waiting-{os.getpid()}")
-    while not os.path.exists(os.path.join(folder, "open")):
-        if not os.path.exists(waiting):
-            open(waiting, "w").close()
-        for name in sorted(os.listdir(folder)):
-            if name.startswith("ticket"):
-                try:
-                    os.unlink(os.path.join(folder, name))
-                    return
-                except FileNotFoundError:   # another worker took it
-                    continue
-        time.sleep(0.05)
 
 
 def warm_up(scene, p: np.ndarray, settings) -> float:
