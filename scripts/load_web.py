@@ -14,7 +14,6 @@ The server is ``ditherlab web`` and the sweep ``ditherlab submit``, each its own
 from __future__ import annotations
 
 import argparse
-import http.client
 import io
 import os
 import random
@@ -28,6 +27,9 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_web import get  # noqa: E402 -- one HTTP GET for both web scripts
 
 BIN = Path(sys.executable).parent / "ditherlab"
 RUNNING = """
@@ -53,16 +55,6 @@ v_d   = [0.1]
 SHOWN = {"friction": "lugre", "method": "averaged", "name": "load-chart",
          "grid": {"W": {"start": 0.0, "stop": 1.2, "num": 61},
                   "v_ref": {"start": 0.005, "stop": 1.2, "num": 60}, "v_d": [0.1, 0.01]}}
-
-
-def get(port: int, path: str) -> tuple[int, bytes]:
-    con = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
-    try:
-        con.request("GET", path)
-        r = con.getresponse()
-        return r.status, r.read()
-    finally:
-        con.close()
 
 
 def whole(kind: str, body: bytes) -> bool:
