@@ -255,6 +255,7 @@ def _one_line_warnings(verbosity: int = 0):
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_OneLine())
     logger = logging.getLogger("ditherlab")
+    level = logger.level
     logger.setLevel({-1: logging.WARNING, 0: logging.INFO, 1: logging.DEBUG}[verbosity])
     saved = warnings.showwarning
     warnings.showwarning = show
@@ -264,6 +265,7 @@ def _one_line_warnings(verbosity: int = 0):
     finally:
         warnings.showwarning = saved
         logger.removeHandler(handler)
+        logger.setLevel(level)   # a command run in-process leaves the caller's logging as it was
 
 
 

@@ -161,7 +161,7 @@ def test_a_token_is_needed_compared_and_never_logged(web_store, serve_ctx, caplo
     from sweeps.web.app import Context
 
     base = serve_ctx(Context(web_store["root"], token=TOKEN))
-    caplog.set_level(logging.DEBUG)
+    caplog.set_level(logging.DEBUG, logger="ditherlab")   # the access log's logger
     assert request(base, "/")[0] == 401
     assert request(base, "/", headers={"Authorization": "Bearer " + "y" * len(TOKEN)})[0] == 401
     assert request(base, "/", headers={"Authorization": f"Bearer {TOKEN}"})[0] == 200
