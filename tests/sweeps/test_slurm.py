@@ -82,6 +82,16 @@ def _submit(tmp_path, env, *extra):
                             stderr=subprocess.PIPE, text=True)
 
 
+def _finished(proc) -> str:
+    """The stdout of a submit that must end with exit 0 once its gate is open."""
+    try:
+        out, err = proc.communicate(timeout=1500)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    return out
+
+
 def test_submit_cluster_slurm_equals_a_local_run(slurm_env, local_cube, tmp_path):
     proc = _submit(tmp_path, slurm_env)
     try:
@@ -129,11 +139,7 @@ def test_a_worker_job_killed_mid_sweep_costs_only_its_blocks(slurm_env, local_cu
         subprocess.run(["scancel", killed], env=slurm_env, check=True, timeout=60)
     finally:
         (gate / "open").touch()
-    try:
-        out, err = proc.communicate(timeout=1500)
-    finally:
-        proc.kill()
-    assert proc.returncode == 0, err
+    out = _finished(proc)
     assert "8/8 ok" in out
     assert killed not in slurm.jobs(slurm_env)
     _same(tmp_path / "store", local_cube)
@@ -157,11 +163,7 @@ def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
         assert not (gate / "open").exists() and proc.poll() is None   # the sweep still runs
     finally:
         (gate / "open").touch()
-    try:
-        out, err = proc.communicate(timeout=1500)
-    finally:
-        proc.kill()
-    assert proc.returncode == 0, err
+    _finished(proc)
     _same(tmp_path / "store", local_cube)
 
 
