@@ -85,7 +85,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
 
     queue = list(reversed(todo))
     inflight: dict = {}        # future -> (block, the workers it may run on)
-    done = as_completed(loop=client.loop)
+    done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
+    # event loop as each block finishes: one f.result() per block costs a round trip to that
+    # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
     good: dict[str, int] = {}
     looked = -1e9
 
@@ -117,8 +119,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if not done.has_ready():
             time.sleep(TICK_S)
             continue
-        finished = [(inflight.pop(f)[0], f.result()) for f in done.next_batch(block=False)
-                     if f in inflight]   # (not: cancelled and submitted again)
+        finished = [(inflight.pop(f)[0], f.result() if f.status == "error" else result)
+                    for f, result in done.next_batch(block=False)
+                    if f in inflight]   # (not: cancelled and submitted again; an error raises)
         sink.many(finished)   # journaled as one group
         bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
 
