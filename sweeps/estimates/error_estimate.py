@@ -86,7 +86,7 @@ def sample(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
     index = sample_index(tuple(len(v) for v in coords), coords, plan.sweep_id)
     if plan.refinement is not None:   # a refined sweep: the nearest first-level points,
         index = plan.refinement.on_first_lattice(index)   # computed before any other
-    return index, plan.points[index]
+    return index, plan.points_at(index)
 
 
 def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dict:

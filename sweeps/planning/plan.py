@@ -9,7 +9,6 @@ is 0, the dither when W == 0 everywhere) and without every observable not reques
 """
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -39,6 +38,12 @@ OMEGA_FLOOR = 50.0
 SECONDS_PER_RADIAN = 1e-5
 BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
+# Tasks per second one submitting process hands out and takes back (dask's scheduler and
+# client, the journal, the cube: about 2 ms of its CPU per task, scripts/bench_scale.py,
+# docs/BATCH.md). Workers that would ask for more (threads / block seconds) get several
+# blocks per task instead (blocks_per_task); the journal keeps the blocks, so a resume
+# with any number of workers finds them.
+SUBMITTER_TASKS_PER_S = 200.0
 
 
 @dataclass
@@ -53,6 +58,7 @@ class Plan:
     coords: dict[str, np.ndarray]
     blocks: list[np.ndarray] = field(repr=False)
     refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
+    block_s: float = 0.0   # estimated seconds of one block (simulated sweeps; 0: unknown)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
@@ -73,14 +79,20 @@ class Plan:
             eff["elasto-plastic phases"] = True
         return eff
 
-    @functools.cached_property
+    @property
     def points(self) -> np.ndarray:
-        """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built once."""
+        """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built on each call."""
         return grid.points(self.spec)
+
+    def points_at(self, index: np.ndarray) -> np.ndarray:
+        """The ``(k, 4)`` grid points at flat indices ``index``, from the axes (the whole
+        grid is never built: at 10^6 points it would be 32 MB held by the submitter)."""
+        at = np.unravel_index(np.asarray(index, dtype=np.int64), self.shape)
+        return np.stack([axis[i] for axis, i in zip(self.coords.values(), at)], axis=1)
 
     def block_points(self, b: int) -> np.ndarray:
         """The ``(k, 4)`` grid points of block ``b`` (columns W, omega, v_ref, vd)."""
-        return self.points[self.blocks[b]]
+        return self.points_at(self.blocks[b])
 
 
 def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
@@ -134,9 +146,11 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
-    if spec.method == "simulate" and not spec.block_size:
+    seconds = 0.0
+    if spec.method == "simulate":
         seconds = point_costs(spec, coords).sum() * spec.time.t_end * SECONDS_PER_RADIAN
-        n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
+        if not spec.block_size:
+            n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
@@ -145,4 +159,18 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
         blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, coords=coords, blocks=blocks)
+                outputs=outputs, coords=coords, blocks=blocks,
+                block_s=seconds / n_blocks)
+
+
+def blocks_per_task(threads: int, block_s: float, blocks_left: int,
+                    ceiling: float | None = None) -> int:
+    """Blocks one dask task computes so that ``threads`` workers busy with blocks of
+    ``block_s`` seconds ask the submitter for at most ``ceiling`` (SUBMITTER_TASKS_PER_S)
+    tasks a second: 1 up to ``ceiling x block_s`` threads, more beyond, but never so many
+    that a thread would be left without a task among the ``blocks_left``."""
+    ceiling = SUBMITTER_TASKS_PER_S if ceiling is None else ceiling
+    if threads < 1 or not block_s > 0:
+        return 1
+    k = math.ceil(threads / (ceiling * block_s))
+    return max(1, min(k, blocks_left // threads))

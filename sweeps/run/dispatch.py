@@ -1,5 +1,7 @@
-"""Computing a run's blocks: on a dask cluster, one block per worker thread (plus one) in
-flight, after compiling the kernel on every worker (:func:`run_blocks`); or, for the
+"""Computing a run's blocks: on a dask cluster, one task per worker thread (plus one) in
+flight, after compiling the kernel on every worker (:func:`run_blocks`), a task being one
+block, or several once the workers would ask the submitter for more tasks a second than it
+hands out (sweeps.planning.plan.blocks_per_task); or, for the
 analysis paths, which cost microseconds per point, in this process (:func:`run_blocks_local`).
 Finished blocks go to a :class:`sweeps.run.sink.BlockSink`, which also says when to stop."""
 from __future__ import annotations
@@ -8,10 +10,12 @@ import threading
 import time
 from contextlib import nullcontext
 
+import numpy as np
+
 from ..workers import task
 from ..workers.cluster import dask_client
 from ..workers.matching import matched
-from ..planning.plan import Plan
+from ..planning.plan import Plan, blocks_per_task
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import phases
 from .sink import BlockSink
@@ -73,9 +77,11 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
 
 def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
               filler=None) -> None:
-    """Keep one block per matching worker thread (plus one) in flight, the next submitted
+    """Keep one task per matching worker thread (plus one) in flight, the next submitted
     as one finishes; once ``sink.should_stop()``, submit no more and collect those in
-    flight (a stop loses no finished work and waits for at most one block per worker).
+    flight (a stop loses no finished work and waits for at most one task per worker). A
+    task computes ``blocks_per_task`` blocks (by the mean block's measured seconds; the
+    plan's estimate until one is back), journaled as blocks.
 
     Every REFRESH_S the workers are looked at again (``client`` is a
     :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
@@ -84,7 +90,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     from distributed import as_completed
 
     queue = list(reversed(todo))
-    inflight: dict = {}        # future -> (block, the workers it may run on)
+    inflight: dict = {}        # future -> (its blocks, the workers it may run on)
+    cost = [plan.block_s, 1]   # seconds of computing, blocks: the mean block's seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
     # event loop as each block finishes: one f.result() per block costs a round trip to that
     # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
@@ -94,12 +101,14 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     def fill() -> None:
         window = sum(good.values()) + 1
         while queue and good and len(inflight) < window:
-            b = queue.pop()
+            k = blocks_per_task(window - 1, cost[0] / cost[1], len(queue))
+            group = [queue.pop() for _ in range(min(k, len(queue)))]
             allowed = list(good)
-            future = client.submit(task.compute_block, plan.scene, plan.block_points(b),
+            future = client.submit(task.compute_block, plan.scene,
+                                   np.concatenate([plan.block_points(b) for b in group]),
                                    plan.params, plan.numerics.settings, pure=False,
                                    workers=allowed)
-            inflight[future] = (b, frozenset(allowed))
+            inflight[future] = (group, frozenset(allowed))
             done.add(future)
         while filler is not None and good and not queue and \
                 len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
@@ -119,21 +128,38 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if not done.has_ready():
             time.sleep(TICK_S)
             continue
-        finished = [(inflight.pop(f)[0], f.result() if f.status == "error" else result)
-                    for f, result in done.next_batch(block=False)
-                    if f in inflight]   # (not: cancelled and submitted again; an error raises)
+        finished = []
+        for f, result in done.next_batch(block=False):
+            if f in inflight:   # (not: cancelled and submitted again)
+                group = inflight.pop(f)[0]
+                result = f.result() if f.status == "error" else result   # an error raises
+                finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
+                cost[0] += float(np.sum(result["cost_s"]))
+                cost[1] += len(group)
         sink.many(finished)   # journaled as one group
         bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+
+
+def split_result(result: dict, group: list[int], sizes: list[int]) -> list[tuple[int, dict]]:
+    """One task's result (the points of the blocks ``group``, ``sizes`` points each, one
+    after another) as ``(block, result)`` per block: per-point arrays cut, the rest
+    (fingerprint, error) repeated."""
+    if len(group) == 1:
+        return [(group[0], result)]
+    ends = np.cumsum(sizes)[:-1]
+    parts = {k: np.split(v, ends) for k, v in result.items() if k not in task.META}
+    meta = {k: v for k, v in result.items() if k in task.META}
+    return [(b, {**{k: v[i] for k, v in parts.items()}, **meta}) for i, b in enumerate(group)]
 
 
 def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
     """Blocks restricted to workers that have all gone (batch jobs ended) wait for ever
     in dask: cancel them and put them first in the queue."""
-    for future, (b, allowed) in list(inflight.items()):
+    for future, (blocks, allowed) in list(inflight.items()):
         if not future.done() and not allowed & good.keys():
             client.cancel(future)
             del inflight[future]
-            queue.append(b)
+            queue.extend(blocks)
 
 
 def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,

@@ -1,0 +1,77 @@
+"""Beyond the submitter's ceiling the dispatch gives each task several blocks
+(sweeps.planning.plan.blocks_per_task): the workers then ask for fewer tasks a second, and
+the journal still receives every block, each with its own points' results."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sweeps.planning import plan as planning
+from sweeps.planning.plan import blocks_per_task, make_plan
+from sweeps.run import dispatch
+from sweeps.spec import parse_spec
+from sweeps.workers import task
+
+
+def test_one_block_a_task_below_the_ceiling_more_beyond():
+    assert blocks_per_task(2, 1.0, 1000, ceiling=200) == 1          # a workstation
+    assert blocks_per_task(200, 1.0, 10**5, ceiling=200) == 1       # at the ceiling
+    assert blocks_per_task(1000, 1.0, 10**5, ceiling=200) == 5      # 1000 / 5 s = 200/s
+    assert blocks_per_task(1000, 0.01, 10**6, ceiling=200) == 500   # cheap blocks
+    assert blocks_per_task(1000, 1.0, 2500, ceiling=200) == 2       # every thread gets one
+    assert blocks_per_task(1000, 1.0, 10, ceiling=200) == 1
+    assert blocks_per_task(0, 1.0, 10) == blocks_per_task(4, 0.0, 10) == 1
+
+
+def _instant(scene, points, p, settings) -> dict:
+    """compute_block at once: every output is the point's omega (so a block's values tell
+    which points it was given)."""
+    n = len(points)
+    return {**{k: points[:, 1].copy() for k in scene.outputs},
+            "status": np.zeros(n, np.int8), "cost_s": np.full(n, 0.5),
+            "steps": np.ones(n, np.int64), "evals": np.ones(n, np.int64),
+            "fingerprint": "fp", "task_points": n}
+
+
+class _Sink:
+    def __init__(self):
+        self.got: dict[int, dict] = {}
+
+    def should_stop(self) -> bool:
+        return False
+
+    def many(self, items) -> None:
+        for b, result in items:
+            assert b not in self.got
+            self.got[b] = result
+
+
+class _Bar:
+    def update(self, n) -> None:
+        pass
+
+
+@pytest.mark.timeout(300)
+def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
+    from distributed import Client, LocalCluster
+
+    from sweeps.workers.matching import matched
+
+    spec = parse_spec({"name": "group", "friction": "lugre", "dither": "sine-velocity",
+                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
+                       "grid": {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
+                                                           "num": 60}}})
+    plan = make_plan(spec)
+    plan.block_s = 1.0
+    monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
+    monkeypatch.setattr(task, "compute_block", _instant)
+    monkeypatch.setattr(task, "META", task.META + ("task_points",))
+    sink = _Sink()
+    with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
+    assert sorted(sink.got) == list(range(len(plan.blocks)))
+    points = plan.points
+    for b, result in sink.got.items():   # each block has its own points' values
+        np.testing.assert_array_equal(result["F_mean"], points[plan.blocks[b], 1])
+    assert max(r["task_points"] for r in sink.got.values()) == 3 * 4   # 3 blocks in a task
