@@ -1,26 +1,30 @@
 """How far one submitting process scales (docs/BATCH.md "How many workers one submitter
 feeds"): what the submitter does per block, measured piece by piece, and the table of
-workers it keeps busy that follows.
+workers it keeps busy that follows. Every figure is wall time and this process's CPU time
+(the machine may be shared: the load average is printed).
 
     .venv/bin/python scripts/bench_scale.py [--quick]
 
-1. sink: blocks/s that the journal (one fsynced file per block) and the catalogue
-   (progress under the lease) accept, through ``sweeps.run.sink.BlockSink`` itself, with
-   the cube filled and republished every 5 s as in a run (one by one, and in groups as
-   the dispatch hands them over);
-2. publish: seconds to publish a cube of 10^3 .. 10^6 points, without and with
-   ``alpha_hist`` (10 values per point);
-3. memory: the submitter's resident memory against cube size (a fresh process per size:
-   plan, empty cube, every block through the sink);
-4. dask: scheduler overhead per task at the plan's block sizes (16 and 256 points; a task
-   that computes nothing, one in flight per worker thread plus one, as sweeps.dispatch);
-5. the table: for a point cost, the plan's block (about 1 s, 16..256 points), its time,
-   and the workers one submitter keeps busy: min(sink, dask) blocks/s x block seconds.
+1. sink: blocks/s that the journal and the catalogue (progress under the lease) accept,
+   through ``sweeps.run.sink.BlockSink`` itself, with the cube filled and republished as
+   in a run, the blocks handed over one by one and in groups (as the dispatch finds them);
+2. publish: a cube of 10^3 .. 10^6 points, without and with ``alpha_hist`` (10 values per
+   point), every value noise (the worst case for compression);
+3. memory: the submitter's peak resident memory against cube size (a fresh process per
+   size: plan, empty cube, every block through the sink with noise values, publish);
+4. dask: the dispatch (``sweeps.run.dispatch``) and sink with a worker task that computes
+   nothing: tasks/s and CPU per task, 1 thread per worker (3 tasks in flight: the latency
+   of one task), 32 (65 in flight: the throughput of many workers), and 32 with 1000
+   more worker addresses in every task's restriction (as 1000 matching workers give);
+5. the table: for a point cost, the plan's block, and the workers one submitter keeps
+   busy with one block a task, and with the blocks per task the dispatch chooses beyond
+   the ceiling (sweeps.planning.plan.blocks_per_task).
 """
 from __future__ import annotations
 
 import argparse
 import json
+import logging
 import os
 import platform
 import subprocess
@@ -53,31 +57,20 @@ def _plan(spec: dict):
     return make_plan(load_spec(spec, max_points=2_000_000))
 
 
-def fake_result(plan, b: int, fingerprint: str) -> dict:
-    """What a worker returns for block ``b`` (values arbitrary, shapes exact)."""
-    n = len(plan.blocks[b])
-    out = {name: np.full((n, 10), 0.1) if name == "alpha_hist" else np.full(n, 0.5)
-           for name in plan.outputs}
-    return {**out, "status": np.zeros(n, np.int8), "cost_s": np.full(n, 0.01),
-            "steps": np.ones(n, np.int64), "evals": np.ones(n, np.int64),
-            "fingerprint": fingerprint}
-
-
 def instant_block(scene, points, p, settings) -> dict:
-    """``sweeps.workers.task.compute_block`` computing nothing: the results of a block of
-    ``points`` of a 4-output simulation (what a worker returns), at once."""
+    """``sweeps.workers.task.compute_block`` computing nothing: what a worker returns for
+    ``points``, at once, every value noise."""
     from sweeps.version import results_fingerprint
 
-    n = len(points)
-    return {**{k: np.full(n, 0.5) for k in scene.outputs}, "status": np.zeros(n, np.int8),
-            "cost_s": np.zeros(n), "steps": np.ones(n, np.int64), "evals": np.ones(n, np.int64),
+    n, rng = len(points), np.random.default_rng(len(points))
+    out = {k: rng.random((n, 10) if k == "alpha_hist" else n) for k in scene.outputs}
+    return {**out, "status": np.zeros(n, np.int8), "cost_s": rng.random(n),
+            "steps": rng.integers(1, 10**6, n), "evals": rng.integers(1, 10**6, n),
             "fingerprint": results_fingerprint()}
 
 
-def sink_run(plan, root: Path, group: int = 1) -> tuple[float, int]:
-    """Feed every block (fake results) through a BlockSink under a real lease, ``group``
-    at a time (as the dispatch hands over the blocks it finds ready), then publish;
-    returns (seconds, blocks)."""
+def _sweep(plan, root: Path):
+    """A registered sweep under a real lease: (sweep folder, lease, cube, BlockSink)."""
     import store
     from sweeps.run.lease_holder import Lease
     from sweeps.run.new_cube import empty_cube
@@ -91,28 +84,39 @@ def sink_run(plan, root: Path, group: int = 1) -> tuple[float, int]:
                        len(plan.blocks), sweep.root, results_fingerprint())
     lease, _ = Lease.take(catalogue, plan.sweep_id, None, None)
     cube = empty_cube(plan)
-    sink = BlockSink(plan, cube, store.Journal(sweep.journal), sweep, lease)
     store.publish(cube, sweep.cube)   # as a run's first publish (h5netcdf imported)
-    fp, n = results_fingerprint(), len(plan.blocks)
-    t = time.perf_counter()   # (results made group by group: as they arrive, then dropped)
+    return sweep, lease, cube, BlockSink(plan, cube, store.Journal(sweep.journal), sweep, lease)
+
+
+def sink_run(plan, root: Path, group: int = 1) -> tuple[float, float, int]:
+    """Every block (noise results) through a BlockSink, ``group`` at a time, then the
+    last publish; returns (seconds, CPU seconds, blocks) of the blocks alone."""
+    import store
+
+    sweep, lease, cube, sink = _sweep(plan, root)
+    n = len(plan.blocks)
+    results = {len(index): instant_block(plan.scene, plan.block_points(b), None, None)
+               for b, index in enumerate(plan.blocks)}   # one per block size: made once,
+    t, c = time.perf_counter(), time.process_time()     # the worker's work, not ours
     for i in range(0, n, group):
-        sink.many([(b, fake_result(plan, b, fp)) for b in range(i, min(n, i + group))])
-    seconds = time.perf_counter() - t   # (the run's last publish: bench_publish)
+        sink.many([(b, results[len(plan.blocks[b])]) for b in range(i, min(n, i + group))])
+    seconds, cpu = time.perf_counter() - t, time.process_time() - c
     store.publish(cube, sweep.cube)
     lease.end("done")
-    return seconds, n
+    return seconds, cpu, n
 
 
-def bench_sink(tmp: Path, n_blocks: int) -> float:
-    """Blocks/s one by one, and in groups of 20 (what the dispatch finds ready in one
-    20-ms tick at 1,000 blocks/s)."""
-    plan = _plan(spec_of(16 * n_blocks, block=16))
-    for group in (1, 20):
-        seconds, n = sink_run(plan, tmp / f"sink-{group}", group)
-        rate = n / seconds
-        print(f"sink      {n} blocks of 16 points, {group:>2} at a time (journal + cube + "
-              f"catalogue + publish every 5 s): {seconds:.2f} s, {rate:,.0f} blocks/s")
-    return rate
+def bench_sink(tmp: Path, n_blocks: int) -> dict[int, float]:
+    """Blocks/s one by one, in groups of 20 (what the dispatch finds ready in one 20-ms
+    tick at 1,000 blocks/s) and of 100."""
+    plan, rates = _plan(spec_of(16 * n_blocks, block=16)), {}
+    for group in (1, 20, 100):
+        seconds, cpu, n = sink_run(plan, tmp / f"sink-{group}", group)
+        rates[group] = n / seconds
+        print(f"sink      {n} blocks of 16 points, {group:>3} at a time (journal + cube + "
+              f"catalogue + publish): {rates[group]:7,.0f} blocks/s, "
+              f"{1e3 * cpu / n:.2f} ms CPU a block")
+    return rates
 
 
 def bench_publish(tmp: Path, sizes: list[int]) -> None:
@@ -124,14 +128,13 @@ def bench_publish(tmp: Path, sizes: list[int]) -> None:
             cube = empty_cube(_plan(spec_of(n, block=256, hist=hist)))
             for v in cube.data_vars.values():
                 v.data[...] = np.random.default_rng(1).random(v.shape).astype(v.data.dtype)
-            path = tmp / f"pub-{n}-{hist}.nc"
-            times = []
+            path, best = tmp / f"pub-{n}-{hist}.nc", (1e9, 1e9)
             for _ in range(3 if n < 1_000_000 else 1):
-                t = time.perf_counter()
+                t, c = time.perf_counter(), time.process_time()
                 store.publish(cube, path)
-                times.append(time.perf_counter() - t)
+                best = min(best, (time.perf_counter() - t, time.process_time() - c))
             print(f"publish   {n:>9,} points{' + alpha_hist' if hist else '':<13} "
-                  f"best {min(times):6.3f} s  ({path.stat().st_size / 1e6:6.1f} MB)")
+                  f"{best[0]:6.3f} s, CPU {best[1]:6.3f} s  ({path.stat().st_size / 1e6:6.1f} MB)")
 
 
 MEMORY_CHILD = """
@@ -153,65 +156,79 @@ print(base, int(hwm) / 1e3, nbytes / 1e6)
 
 
 def bench_memory(tmp: Path, sizes: list[int]) -> None:
+    before = None
     for n in sizes:
         code = MEMORY_CHILD.format(root=str(ROOT), n=n, tmp=str(tmp / f"mem-{n}"))
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                              check=True, cwd=tmp)
         base, peak, cube_mb = map(float, out.stdout.split()[-3:])
+        grew = "" if before is None else \
+            f"; {(peak - base - before[0]) / (cube_mb - before[1]):4.2f} MB per MB of cube since"
         print(f"memory    {n:>9,} points + alpha_hist: cube {cube_mb:7.1f} MB, submitter's "
               f"peak {peak - base:7.1f} MB above its imports ({(peak - base) / cube_mb:5.2f} x "
-              f"the cube)")
+              f"the cube{grew})")
+        before = (peak - base, cube_mb)
 
 
-def noop_block(n: int) -> dict:
-    """A worker's result of ``n`` points, computed instantly (arrays as compute_block's)."""
-    return {"F_mean": np.zeros(n), "status": np.zeros(n, np.int8), "cost_s": np.zeros(n),
-            "steps": np.zeros(n, np.int64), "evals": np.zeros(n, np.int64)}
+def bench_dask(tmp: Path, n_tasks: int) -> dict[str, float]:
+    """Tasks/s through the run's own dispatch and sink (a LocalCluster of 2 workers; the
+    scheduler in this process, as with --cluster), every task one 16-point block."""
+    from distributed import Client, LocalCluster
 
+    from sweeps.run import dispatch
+    from sweeps.workers import task
+    from sweeps.workers.matching import matched
 
-def bench_dask(sizes: list[int], n_tasks: int) -> dict[int, float]:
-    """Tasks/s through a LocalCluster of 2 single-threaded workers, as sweeps.dispatch
-    submits them (restricted to the matching workers, window threads + 1)."""
-    import logging
-
-    from distributed import Client, LocalCluster, as_completed
-
-    rates = {}
-    with LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1",
-                      dashboard_address=None, silence_logs=logging.CRITICAL,
-                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster, \
-            Client(cluster) as client:
-        workers = list(client.nthreads())
-        for size in sizes:
-            client.submit(noop_block, size, pure=False).result()
-            t, left = time.perf_counter(), n_tasks
-            done = as_completed()
-            for _ in range(min(left, 3)):
-                done.add(client.submit(noop_block, size, pure=False, workers=workers))
-                left -= 1
-            for future in done:
-                future.result()
-                if left:
-                    done.add(client.submit(noop_block, size, pure=False, workers=workers))
-                    left -= 1
-            rates[size] = n_tasks / (time.perf_counter() - t)
-            print(f"dask      {n_tasks} tasks of {size:>3} points, 2 workers: "
-                  f"{1e3 / rates[size]:.2f} ms per task, {rates[size]:,.0f} tasks/s")
+    task.compute_block = instant_block   # (pickled by reference: scripts.bench_scale)
+    plan, rates = _plan(spec_of(16 * n_tasks, block=16)), {}
+    for threads, more in ((1, 0), (32, 0), (32, 1000)):
+        with LocalCluster(n_workers=2, threads_per_worker=threads, host="127.0.0.1",
+                          dashboard_address=None, silence_logs=logging.CRITICAL,
+                          scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster, \
+                Client(cluster) as client:
+            sweep, lease, cube, sink = _sweep(plan, tmp / f"dask-{threads}-{more}")
+            client.run(task.identity)
+            mc = matched(client)
+            if more:   # addresses nobody listens at, in every task's restriction
+                matching, fake = mc.check.matching, {f"tcp://127.0.0.2:{20000 + i}": 1
+                                                     for i in range(more)}
+                mc.check.matching = lambda: {**matching(), **fake}
+            t, c = time.perf_counter(), time.process_time()
+            dispatch._dispatch(mc, plan, list(range(n_tasks)), sink, _NoBar())
+            seconds, cpu = time.perf_counter() - t, time.process_time() - c
+            lease.end("done")
+        key = f"{threads}" + (f"+{more}" if more else "")
+        rates[key] = n_tasks / seconds
+        print(f"dask      {n_tasks} tasks of 16 points, 2 workers x {threads:>2} threads"
+              f"{f' (+{more} addresses)' if more else '':<17}: {rates[key]:5,.0f} tasks/s, "
+              f"{1e3 * cpu / n_tasks:.2f} ms CPU a task (dispatch + sink + scheduler)")
     return rates
 
 
-def table(sink_rate: float, dask_rates: dict[int, float]) -> None:
+class _NoBar:
+    def update(self, n) -> None:
+        pass
+
+
+def table(sink_rates: dict[int, float], dask_rates: dict[str, float]) -> None:
     """Workers one submitter keeps busy, for a point cost (the plan's ~1 s blocks)."""
-    from sweeps.planning.plan import BLOCK_POINTS, BLOCK_SECONDS
+    from sweeps.planning.plan import BLOCK_POINTS, BLOCK_SECONDS, SUBMITTER_TASKS_PER_S
 
     lo, hi = BLOCK_POINTS["simulate"]
-    print("\npoint cost   block (points)   block time   submitter blocks/s   workers kept busy")
+    tasks = min(dask_rates["32"], sink_rates[20])
+    blocks = max(sink_rates.values())
+    print(f"\nsubmitter: {tasks:,.0f} tasks/s of one block (min of dask at 65 in flight and "
+          f"the sink in groups of 20); the journal {blocks:,.0f} blocks/s in groups; "
+          f"the plan assumes {SUBMITTER_TASKS_PER_S:,.0f} tasks/s")
+    print("point cost   block (points)   block time   workers busy, 1 block a task   "
+          "blocks a task for 1000 workers   workers busy then")
     for cost in (1e-4, 1e-3, 1e-2, 1e-1, 1.0):
         points = int(min(hi, max(lo, round(BLOCK_SECONDS / cost))))
         seconds = points * cost
-        rate = min(sink_rate, dask_rates[16 if points < 128 else 256])
-        print(f"{cost * 1e3:8.1f} ms   {points:>14}   {seconds:8.3f} s   {rate:18,.0f}   "
-              f"{rate * seconds:17,.0f}")
+        k = max(1, int(np.ceil(1000 / (SUBMITTER_TASKS_PER_S * seconds))))
+        busy = min(tasks * k * seconds, blocks * seconds)
+        print(f"{cost * 1e3:8.1f} ms   {points:>14}   {seconds:8.3f} s   "
+              f"{tasks * seconds:28,.0f}   {k:30}   {busy:17,.0f}")
 
 
 def cpu_model() -> str:
@@ -224,18 +241,26 @@ def cpu_model() -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller sizes (a smoke run)")
+    ap.add_argument("--only", choices=("sink", "publish", "memory", "dask"),
+                    help="one measure alone (no table)")
     args = ap.parse_args()
     sizes = [1_000, 10_000, 100_000] + ([] if args.quick else [1_000_000])
-    print(f"CPU: {cpu_model()}, {os.cpu_count()} cores; python {platform.python_version()}")
+    print(f"CPU: {cpu_model()}, {os.cpu_count()} cores; python {platform.python_version()}; "
+          f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     with tempfile.TemporaryDirectory(prefix="bench-scale-") as d:
         tmp = Path(d)
-        sink_rate = bench_sink(tmp, 500 if args.quick else 3000)
-        bench_publish(tmp, sizes)
-        bench_memory(tmp, sizes[1:])
-        dask_rates = bench_dask([16, 256], 200 if args.quick else 1000)
-    table(sink_rate, dask_rates)
-    print(json.dumps({"sink_blocks_per_s": round(sink_rate),
-                      "dask_tasks_per_s": {k: round(v) for k, v in dask_rates.items()}}))
+        run = (lambda what: args.only in (None, what))
+        sink_rates = bench_sink(tmp, 500 if args.quick else 3000) if run("sink") else {}
+        if run("publish"):
+            bench_publish(tmp, sizes)
+        if run("memory"):
+            bench_memory(tmp, sizes[1:])
+        dask_rates = bench_dask(tmp, 200 if args.quick else 1000) if run("dask") else {}
+    print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
+    if args.only is None:
+        table(sink_rates, dask_rates)
+        print(json.dumps({"sink_blocks_per_s": {k: round(v) for k, v in sink_rates.items()},
+                          "dask_tasks_per_s": {k: round(v) for k, v in dask_rates.items()}}))
 
 
 if __name__ == "__main__":

@@ -131,7 +131,7 @@ class Reader(threading.Thread):
 
 
 def _journal_count(journal: Path) -> int:
-    return len(list(journal.glob("block-*.npz"))) if journal.is_dir() else 0
+    return len(store.Journal(journal).files())
 
 
 def _start(args: list[str], env: dict, log: Path) -> subprocess.Popen:

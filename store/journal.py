@@ -1,38 +1,26 @@
 """Crash-safe journal of finished blocks (DESIGN.md §4): the truth a cube is rebuilt from.
 
-The submitting process is the only writer. Each finished block of points goes to
-its own small ``.npz`` file ``<sweep>/journal/block-000042.npz``, written under a
-temporary name, fsynced and renamed, so a file with a final name is always
-complete. The cube is rebuilt from the journal (``rebuild``) and published every
-few blocks and at the end; a resumed sweep computes only the blocks the journal
-lacks.
+The submitting process is the only writer. The blocks it finishes together go to one
+``.npz`` file ``<sweep>/journal/group-00000042.npz`` (store.journal_groups; journals
+written before groups, and :meth:`Journal.write`, have a file per block,
+``block-000042.npz``), written under a temporary name, fsynced and renamed, so a file
+with a final name is always complete. The cube is rebuilt from the journal (``rebuild``)
+and published every few blocks and at the end; a resumed sweep computes only the blocks
+the journal lacks.
 
-A block's payload is a flat dict of arrays with one row per point (``n`` rows):
+A block's payload is a flat dict of arrays with one row per point: ``index`` (int64,
+C-order flat indices, store.cube), ``status`` (int8, codes 0..3), ``cost_s`` (float64
+seconds), ``steps`` and ``evals`` (int64), and one float64 array per cube output, e.g.
+``F_mean`` (``(n, k)`` for a vector output such as ``alpha_hist``). ``block_payload``
+builds it from the same arguments as ``store.points.fill``.
 
-=========  =======  ==========================================
-key        dtype    meaning
-=========  =======  ==========================================
-index      int64    C-order flat indices of the points (store.cube)
-status     int8     status codes 0..3
-cost_s     float64  seconds per point
-steps      int64    accepted steps per point
-evals      int64    right-hand-side evaluations per point
-<output>   float64  one array per cube output, e.g. ``F_mean`` (``(n, k)`` for a
-                    vector output such as ``alpha_hist``)
-=========  =======  ==========================================
-
-``block_payload`` builds it from the same arguments as ``store.points.fill``.
-
-Every block file also holds ``_sha256``: the SHA-256 of its block id and of each
-array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes,
-and (``rebuild``) the cube's shape, index range and status codes and the plan's
-points of that block. A block that fails any check is never read as data: it is
-moved to ``journal/bad/`` with one warning line and its points are computed again.
-Blocks without a checksum (journals written before checksums existed, or files
-written by another program) are treated the same way: they cannot be verified, so
-they are set aside and recomputed rather than trusted.
-A block may also hold ``_engine``, inside the checksum: the results fingerprint of the
-worker that computed it (``Journal.engine_of``).
+Every file also holds ``_sha256``: the SHA-256 of its block id (group number) and of each
+array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes, and
+(``rebuild``) the cube's shape, index range and status codes and the plan's points of the
+block. A file that fails any check, or has no checksum (older journals, other programs),
+is never read as data: it is moved to ``journal/bad/`` with one warning line and its
+points are computed again. ``_engine``, inside the checksum, is the results fingerprint
+of the worker that computed the blocks (``Journal.engine_of``).
 """
 
 from __future__ import annotations
@@ -49,16 +37,12 @@ from pathlib import Path
 
 import numpy as np
 
+from . import journal_groups as groups
 from .atomic import atomic_write, remove_stale_temps
 from .points import fill
 
-FIELDS = {
-    "index": np.int64,
-    "status": np.int8,
-    "cost_s": np.float64,
-    "steps": np.int64,
-    "evals": np.int64,
-}
+FIELDS = {"index": np.int64, "status": np.int8, "cost_s": np.float64, "steps": np.int64,
+          "evals": np.int64}
 CHECKSUM = "_sha256"
 ENGINE = "_engine"   # the results fingerprint of the worker that computed the block (ASCII)
 BAD_DIR = "bad"
@@ -129,16 +113,12 @@ def block_bytes(n_points: int, n_values: int) -> int:
 
 
 class Journal:
-    """The journal folder of one sweep: ``Journal(SweepDir(store_root, id).journal)``.
-
-    Parameters
-    ----------
-    folder
-        The journal folder; created on the first ``write``.
-    """
+    """The journal folder of one sweep: ``Journal(SweepDir(store_root, id).journal)``;
+    ``folder`` is created on the first write."""
 
     def __init__(self, folder):
         self.folder = Path(folder)
+        self._seq: int | None = None   # the last group written (this writer's)
 
     def __repr__(self) -> str:
         return f"Journal({str(self.folder)!r})"
@@ -163,32 +143,52 @@ class Journal:
         np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
         return atomic_write(path, buf.getbuffer())
 
+    def write_group(self, items: list[tuple[int, Mapping[str, np.ndarray]]],
+                    engine: str | None = None) -> Path:
+        """Record finished blocks ``(block_id, payload)`` as one group file (as
+        :meth:`write`, one fsync for them all: store.journal_groups). Returns its path."""
+        extra = {} if engine is None else {ENGINE: np.frombuffer(engine.encode("ascii"), np.uint8)}
+        items = [(b, _checked(p)) for b, p in items if self.path(b)]   # (ids checked)
+        self._seq = groups.next_seq(self.folder) if self._seq is None else self._seq + 1
+        return atomic_write(self.folder / groups.file_name(self._seq),
+                            groups.image(self._seq, items, extra, CHECKSUM))
+
     def engine_of(self, block_id: int) -> str | None:
         """The fingerprint of the engine that computed a verified block (None: not recorded)."""
-        return self._verified(block_id, self.path(block_id))[1]
+        return self._verified(block_id, self._where(block_id))[1]
 
     def files(self) -> dict[int, Path]:
-        """Block id -> file, for every file with a block's final name (unverified).
+        """Block id -> file (its block file, or the last group holding it), unverified.
         Temporary files of writers that are gone are removed first."""
         if not self.folder.is_dir():
             return {}
         with suppress(OSError):   # a read-only store keeps its leftovers
             remove_stale_temps(self.folder)
         found = (( _NAME.match(p.name), p) for p in sorted(self.folder.iterdir()))
-        return {int(m.group(1)): p for m, p in found if m}
+        return {**{int(m.group(1)): p for m, p in found if m}, **groups.index(self.folder)}
 
-    def load(self, block_id: int, path: Path | None = None) -> dict[str, np.ndarray]:
+    def _where(self, block_id: int) -> Path:
+        return self.files().get(block_id) or self.path(block_id)
+
+    def load(self, block_id: int, path: Path | None = None, memo: dict | None = None
+             ) -> dict[str, np.ndarray]:
         """The verified payload of one block file; ``BadBlock`` saying why it cannot be
         trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
-        path = self.path(block_id) if path is None else path
-        arrays, _ = self._verified(block_id, path)
+        path = self._where(block_id) if path is None else path
+        arrays, _ = self._verified(block_id, path, memo)
         try:
             return _checked(arrays, strict=True)
         except ValueError as err:
             raise BadBlock(_brief(err)) from None
 
-    def _verified(self, block_id: int, path: Path) -> tuple[dict, str | None]:
+    def _verified(self, block_id: int, path: Path, memo: dict | None = None
+                  ) -> tuple[dict, str | None]:
         """The arrays of a block file whose checksum holds, and its engine fingerprint."""
+        if groups.NAME.match(path.name):   # a block of a group file, which is checked whole
+            try:
+                return self._engine(groups.block(path, block_id, CHECKSUM, memo))
+            except Exception as err:  # noqa: BLE001 -- as below: unreadable, checksum...
+                raise BadBlock(f"group {path.name}, all its blocks: {_brief(err)}") from None
         try:
             with open(path, "rb") as f, np.load(f, allow_pickle=False) as npz:
                 arrays = {k: npz[k] for k in npz.files}
@@ -200,6 +200,10 @@ class Journal:
                            "another program)")
         if not np.array_equal(stored, checksum(block_id, arrays)):
             raise BadBlock("checksum mismatch (the file changed after it was written)")
+        return self._engine(arrays)
+
+    @staticmethod
+    def _engine(arrays: dict) -> tuple[dict, str | None]:
         engine = arrays.pop(ENGINE, None)
         return arrays, None if engine is None else engine.tobytes().decode("ascii", "replace")
 
@@ -212,9 +216,10 @@ class Journal:
         when ``repair``; without it (a reader that does not hold the sweep) it is only
         skipped, silently: its writer will set it aside.
         """
-        for block_id, path in self.files().items():
+        memo: dict = {}
+        for block_id, path in sorted(self.files().items()):
             try:
-                payload = self.load(block_id, path)
+                payload = self.load(block_id, path, memo)
                 if blocks is not None:
                     _check_plan(block_id, payload["index"], blocks)
             except BadBlock as err:
@@ -231,7 +236,7 @@ class Journal:
         """Move a block file that cannot be trusted to ``journal/bad/`` (kept for a look,
         never read again) with one ``JournalWarning``; its points will be recomputed.
         Returns the new path, or None if it could not be moved (a read-only store)."""
-        path = self.path(block_id) if path is None else path
+        path = self._where(block_id) if path is None else path
         dest = self.folder / BAD_DIR / f"{path.name}.{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}"
         try:
             dest.parent.mkdir(exist_ok=True)
@@ -266,15 +271,7 @@ def _warn(message: str) -> None:
 def fill_block(ds, payload: Mapping[str, np.ndarray]) -> None:
     """``store.points.fill`` from a journal payload."""
     values = {k: v for k, v in payload.items() if k not in FIELDS}
-    fill(
-        ds,
-        payload["index"],
-        values,
-        payload["status"],
-        payload["cost_s"],
-        payload["steps"],
-        payload["evals"],
-    )
+    fill(ds, payload["index"], values, *(payload[k] for k in ("status", "cost_s", "steps", "evals")))
 
 
 def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = None,

@@ -11,8 +11,8 @@ fingerprint, and what to do. With only foreign workers nothing is computed and t
 ends with that line (:class:`ForeignWorkersError`, exit 1). The sink checks each block's
 own fingerprint again before journaling it (sweeps.run.sink), the last line of defence.
 
-:class:`MatchedClient` is the run's client with these restrictions applied to ``submit``
-and ``run``; everything else is the dask client's.
+:class:`MatchedClient` is the run's client with these restrictions applied to ``submit``,
+``map`` and ``run``; everything else is the dask client's.
 """
 from __future__ import annotations
 
@@ -99,7 +99,7 @@ class WorkerCheck:
 
 
 class MatchedClient:
-    """A dask client whose ``submit`` and ``run`` reach only the matching workers (waiting
+    """A dask client whose ``submit``, ``map`` and ``run`` reach only the matching workers (waiting
     for one if none is connected yet); ``check`` is the :class:`WorkerCheck`, ``scaler``
     a batch cluster's :class:`sweeps.workers.batch.JobScaler` (None otherwise)."""
 
@@ -114,6 +114,10 @@ class MatchedClient:
     def submit(self, *args, workers=None, **kwargs):
         workers = list(workers or self.check.wait())
         return self.client.submit(*args, workers=workers, allow_other_workers=False, **kwargs)
+
+    def map(self, *args, workers=None, **kwargs):
+        workers = list(workers or self.check.wait())
+        return self.client.map(*args, workers=workers, allow_other_workers=False, **kwargs)
 
     def run(self, *args, workers=None, **kwargs):
         return self.client.run(*args, workers=list(workers or self.check.wait()), **kwargs)

@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+import store
 from sweeps.spec import load_spec
 
 from .conftest import BIN, SIMULATE_SPEC, ditherlab
@@ -93,7 +94,7 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file, env, gate):
                             start_new_session=True)
     n_blocks = 32
     gate.let(3)
-    done = lambda: len(list(journal.glob("*.npz"))) if journal.exists() else 0
+    done = lambda: len(store.Journal(journal).files())   # journaled blocks
     _wait_for(lambda: done() >= 3 or proc.poll() is not None, 300, "three journaled blocks",
               poll=0.02)
     os.killpg(proc.pid, signal.SIGKILL)  # the submitter and its local cluster, mid-flight

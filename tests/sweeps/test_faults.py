@@ -211,7 +211,7 @@ def test_disk_filling_up_mid_run_stops_with_one_line_and_resumes(tmp_path, spec_
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     journal = root / spec.sweep_id / "journal"
     gate.let(3)
-    _wait_for(lambda: len(list(journal.glob("block-*.npz"))) >= 3 or proc.poll() is not None,
+    _wait_for(lambda: len(store.Journal(journal).files()) >= 3 or proc.poll() is not None,
               300, "three journaled blocks", poll=0.02)
     filler = root.parent / "filler"
     subprocess.run(["dd", "if=/dev/zero", f"of={filler}", "bs=4k"], capture_output=True)
@@ -222,7 +222,7 @@ def test_disk_filling_up_mid_run_stops_with_one_line_and_resumes(tmp_path, spec_
     last = err.strip().splitlines()[-1]
     assert last.startswith("ditherlab: no space left on device writing ") and \
         "the journal keeps the " in last
-    kept = len(list(journal.glob("block-*.npz")))
+    kept = len(store.Journal(journal).files())
     store.open_cube(_cube(root, spec))            # readable
     filler.unlink()
     assert kept == 3 and last.endswith("the journal keeps the 3 finished blocks (of 32)"), last
@@ -240,16 +240,19 @@ def test_bad_journal_blocks_are_set_aside_and_recomputed(avg, tmp_path):
     shutil.copytree(clean, root)
     journal = store.Journal(root / spec.sweep_id / "journal")
 
+    files = journal.files()   # (a run in this process journals each block in its own file)
+    assert len({files[b] for b in (1, 2, 3, 4)}) == 4
+
     def rewrite(block_id, change):   # as another program would: plain np.savez
-        with np.load(journal.path(block_id)) as npz:
+        with np.load(files[block_id]) as npz:
             arrays = {k: npz[k] for k in npz.files if k != "_sha256"}
         change(arrays)
-        with open(journal.path(block_id), "wb") as f:
+        with open(files[block_id], "wb") as f:
             np.savez(f, **arrays)
 
-    data = bytearray(journal.path(1).read_bytes())
+    data = bytearray(files[1].read_bytes())
     data[len(data) // 3: len(data) // 3 + 64] = b"\xff" * 64
-    journal.path(1).write_bytes(bytes(data))                                   # flipped bytes
+    files[1].write_bytes(bytes(data))                                          # flipped bytes
     rewrite(2, lambda a: a.__setitem__("status", np.full_like(a["status"], 7)))  # bad codes
     rewrite(3, lambda a: a.__setitem__("F_eff", a["F_eff"] * 0 + 1e9))         # wrong numbers
     rewrite(4, lambda a: a.__setitem__("index", a["index"][:5]))               # wrong shape
@@ -334,7 +337,7 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True, preexec_fn=as_a_terminal_job)
     gate.let(2)
-    _wait_for(lambda: len(list(journal.glob("block-*.npz"))) >= 2 or proc.poll() is not None,
+    _wait_for(lambda: len(store.Journal(journal).files()) >= 2 or proc.poll() is not None,
               300, "two journaled blocks", poll=0.02)
     os.killpg(proc.pid, signal.SIGINT)
     try:
@@ -344,7 +347,7 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     last = err.strip().splitlines()[-1]
-    kept = len(list(journal.glob("block-*.npz")))
+    kept = len(store.Journal(journal).files())
     assert last == (f"ditherlab: interrupted; the journal keeps the {kept} finished blocks "
                     "(of 32); submit the spec again to resume")
     store.open_cube(root / spec.sweep_id / "cube.nc")

@@ -150,13 +150,13 @@ def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path, env, gate):
                             start_new_session=True)
     gate.let(3)   # as many tasks as are in flight (2 workers + 1): a block among them
     t0 = time.monotonic()
-    while (len(list(journal.glob("*.npz"))) if journal.exists() else 0) < 1:
+    while len(store.Journal(journal).files()) < 1:
         assert proc.poll() is None and time.monotonic() - t0 < 300, "no blocks journaled"
         time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     gate.open()
-    assert 1 <= len(list(journal.glob("*.npz"))) <= 3
+    assert 1 <= len(store.Journal(journal).files()) <= 3
     resumed = subprocess.run([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
                              capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0 and "done" in resumed.stdout, resumed.stderr

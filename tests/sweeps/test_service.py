@@ -55,7 +55,7 @@ def _row(root, sweep_id):
 
 def _journaled(root, sweep_id) -> int:
     folder = root / sweep_id / "journal"
-    return len(list(folder.glob("block-*.npz"))) if folder.exists() else 0
+    return len(store.Journal(folder).files())
 
 
 def _computed(log) -> collections.Counter:
@@ -264,7 +264,7 @@ def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
     assert "attaching" in attached and "blocks (" in attached, attached   # progress shown
     after = _computed(tmp_path / "blocks.log") - before
     plan = make_plan(spec)
-    journaled = {int(f.stem.split("-")[1]) for f in (root / sid / "journal").glob("*.npz")}
+    journaled = set(store.Journal(root / sid / "journal").files())
     assert len(journaled) == N_SLOW
     keys = _block_keys(spec)
     resumed = sorted(after[key] for key in keys)
