@@ -7,21 +7,10 @@ complete. The cube is rebuilt from the journal (``rebuild``) and published every
 few blocks and at the end; a resumed sweep computes only the blocks the journal
 lacks.
 
-A block's payload is a flat dict of arrays with one row per point (``n`` rows):
-
-=========  =======  ==========================================
-key        dtype    meaning
-=========  =======  ==========================================
-index      int64    C-order flat indices of the points (store.cube)
-status     int8     status codes 0..3
-cost_s     float64  seconds per point
-steps      int64    accepted steps per point
-evals      int64    right-hand-side evaluations per point
-<output>   float64  one array per cube output, e.g. ``F_mean`` (``(n, k)`` for a
-                    vector output such as ``alpha_hist``)
-=========  =======  ==========================================
-
-``block_payload`` builds it from the same arguments as ``store.points.fill``.
+A block is a :class:`store.record.BlockRecord` (the same record the worker made and
+``store.points.fill`` writes into the cube); its file holds one array per field and output,
+named as the record's fields (``index``, ``status``, ``cost_s``, ``steps``, ``evals``) and
+outputs (``F_mean``, ...).
 
 Every block file also holds ``_sha256``: the SHA-256 of its block id and of each
 array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes,
@@ -49,14 +38,8 @@ import numpy as np
 
 from .atomic import atomic_write, remove_stale_temps
 from .points import fill
+from .record import BlockRecord
 
-FIELDS = {
-    "index": np.int64,
-    "status": np.int8,
-    "cost_s": np.float64,
-    "steps": np.int64,
-    "evals": np.int64,
-}
 CHECKSUM = "_sha256"
 BAD_DIR = "bad"
 _NAME = re.compile(r"^block-(\d+)\.npz$")
@@ -68,49 +51,6 @@ class JournalWarning(UserWarning):
 
 class BadBlock(ValueError):
     """Why a block file cannot be trusted (the warning's text)."""
-
-
-def block_payload(
-    flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
-) -> dict[str, np.ndarray]:
-    """A journal payload from the arguments of ``store.points.fill`` (see module doc)."""
-    payload = {
-        "index": flat_index,
-        "status": status,
-        "cost_s": cost_s,
-        "steps": steps,
-        "evals": evals,
-    }
-    clash = sorted(set(values) & set(payload))
-    if clash:
-        raise ValueError(
-            f"block_payload: output names {clash} clash with the journal's own fields {sorted(FIELDS)}"
-        )
-    payload.update(values)
-    return _checked(payload)
-
-
-def _checked(payload: Mapping[str, np.ndarray], strict: bool = False) -> dict[str, np.ndarray]:
-    """The payload's arrays with the journal's dtypes (``strict``: they must have them)."""
-    missing = [k for k in FIELDS if k not in payload]
-    if missing:
-        raise ValueError(
-            f"journal payload lacks {missing}; build it with store.journal.block_payload"
-        )
-    if strict:
-        wrong = {k: str(np.asarray(v).dtype) for k, v in payload.items()
-                 if np.asarray(v).dtype != FIELDS.get(k, np.float64)}
-        if wrong:
-            raise ValueError(f"journal payload has wrong dtypes {wrong}")
-    out = {k: np.asarray(v, dtype=FIELDS.get(k, np.float64)) for k, v in payload.items()}
-    n = out["index"].shape
-    # one row per point; an output may carry one extra trailing axis (alpha_hist)
-    bad = {k: v.shape for k, v in out.items()
-           if v.shape[:1] != n or v.ndim > (1 if k in FIELDS else 2)}
-    if bad:
-        raise ValueError(f"journal payload arrays must have index's length {n[0]} first "
-                         f"(1-D, or 2-D for a vector output); got {bad}")
-    return out
 
 
 def checksum(block_id: int, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -151,14 +91,14 @@ class Journal:
             raise ValueError(f"block_id must be a non-negative integer, got {block_id!r}")
         return self.folder / f"block-{int(block_id):06d}.npz"
 
-    def write(self, block_id: int, payload: Mapping[str, np.ndarray]) -> Path:
+    def write(self, block_id: int, record: BlockRecord) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
         checksum. Free space is checked first (``store.errors.NoSpaceError``).
 
         Writing a block again replaces it. Returns the file's path.
         """
         path = self.path(block_id)
-        arrays = _checked(payload)
+        arrays = record.arrays()
         buf = io.BytesIO()
         np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
         return atomic_write(path, buf.getbuffer())
@@ -173,8 +113,8 @@ class Journal:
         found = (( _NAME.match(p.name), p) for p in sorted(self.folder.iterdir()))
         return {int(m.group(1)): p for m, p in found if m}
 
-    def load(self, block_id: int, path: Path | None = None) -> dict[str, np.ndarray]:
-        """The verified payload of one block file; ``BadBlock`` saying why it cannot be
+    def load(self, block_id: int, path: Path | None = None) -> BlockRecord:
+        """The verified record of one block file; ``BadBlock`` saying why it cannot be
         trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
         path = self.path(block_id) if path is None else path
         try:
@@ -189,13 +129,13 @@ class Journal:
         if not np.array_equal(stored, checksum(block_id, arrays)):
             raise BadBlock("checksum mismatch (the file changed after it was written)")
         try:
-            return _checked(arrays, strict=True)
+            return BlockRecord.from_arrays(arrays, strict=True)
         except ValueError as err:
             raise BadBlock(_brief(err)) from None
 
     def read(self, blocks: Sequence[np.ndarray] | None = None, repair: bool = True
-             ) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
-        """Yield ``(block_id, payload)`` for every verified block, in id order.
+             ) -> Iterator[tuple[int, BlockRecord]]:
+        """Yield ``(block_id, record)`` for every verified block, in id order.
 
         ``blocks`` (the plan's flat indices per block id) also refuses a block whose
         points are not those of its id. A refused block is set aside (``set_aside``)
@@ -204,14 +144,14 @@ class Journal:
         """
         for block_id, path in self.files().items():
             try:
-                payload = self.load(block_id, path)
+                record = self.load(block_id, path)
                 if blocks is not None:
-                    _check_plan(block_id, payload["index"], blocks)
+                    _check_plan(block_id, record.index, blocks)
             except BadBlock as err:
                 if repair:
                     self.set_aside(block_id, str(err), path)
                 continue
-            yield block_id, payload
+            yield block_id, record
 
     def done(self, blocks: Sequence[np.ndarray] | None = None) -> set[int]:
         """Ids of the blocks with a verified file (bad ones are set aside)."""
@@ -253,20 +193,6 @@ def _warn(message: str) -> None:
     warnings.warn(message, JournalWarning, stacklevel=3)
 
 
-def fill_block(ds, payload: Mapping[str, np.ndarray]) -> None:
-    """``store.points.fill`` from a journal payload."""
-    values = {k: v for k, v in payload.items() if k not in FIELDS}
-    fill(
-        ds,
-        payload["index"],
-        values,
-        payload["status"],
-        payload["cost_s"],
-        payload["steps"],
-        payload["evals"],
-    )
-
-
 def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = None,
             repair: bool = True):
     """A new cube: a deep copy of ``ds_empty`` with every verified journal block filled in.
@@ -278,9 +204,9 @@ def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = No
     itself is not modified.
     """
     ds = ds_empty.copy(deep=True)
-    for block_id, payload in journal.read(blocks, repair=repair):
+    for block_id, record in journal.read(blocks, repair=repair):
         try:
-            fill_block(ds, payload)   # checks everything before it writes anything
+            fill(ds, record)   # checks everything before it writes anything
         except ValueError as err:
             if repair:
                 journal.set_aside(block_id, f"it does not fit the cube ({_brief(err)})")

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from engine import status as S
+from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
@@ -45,12 +46,10 @@ class SampleRuns:
     sample is known before its first level ends: sweeps.estimates.error_estimate.sample)."""
 
     def __init__(self, plan: Plan):
-        from ..planning.plan import point_costs
-
         self.plan, self.finer = plan, errest.finer_numerics(plan)
         self.index, self.points = errest.sample(plan)
         self.scene = plan.scene.with_(integrator=self.finer.integrator)
-        cost = point_costs(plan.spec, plan.coords)[self.index]
+        cost = plan.costs[self.index]
         self.order = np.argsort(-cost, kind="stable")
         self.futures: dict[int, object] = {}
 
@@ -64,15 +63,15 @@ class SampleRuns:
         i = int(self.order[len(self.futures)])
         self.futures[i] = client.submit(task.compute_block, self.scene,
                                         self.points[i:i + 1], self.plan.params,
-                                        self.finer.settings, pure=False)
+                                        self.finer.settings, self.index[i:i + 1], pure=False)
         return True
 
-    def gather(self, client) -> list[dict]:
+    def gather(self, client) -> BlockRecord:
         """Every re-run's result, in sample order (the rest submitted now)."""
         while self.submit_next(client):
             pass
-        results = client.gather([self.futures[i] for i in range(len(self.order))])
-        return results
+        return BlockRecord.concatenate(
+            client.gather([self.futures[i] for i in range(len(self.order))]))
 
     def cancel(self, client) -> None:
         client.cancel(list(self.futures.values()))
@@ -83,10 +82,7 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None)
     ``started``) and compare."""
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
-    parts = runs.gather(client)
-    result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
-              if k != "error"}
-    return errest.compare(plan, cube, index, result, finer.label)
+    return errest.compare(plan, cube, index, runs.gather(client), finer.label)
 
 
 def _write_json(path: Path, data: dict) -> None:

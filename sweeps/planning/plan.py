@@ -9,7 +9,6 @@ is 0, the dither when W == 0 everywhere) and without every observable not reques
 """
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -18,8 +17,8 @@ import numpy as np
 from engine import params as P
 from engine.scene import Scene
 
-from ..spec import grid
 from ..spec.accuracy import Numerics, numerics
+from ..spec.grid import GridFacts, base_params
 from ..spec.methods import resolve_outputs
 from ..spec.models import Spec
 
@@ -50,14 +49,20 @@ class Plan:
     params: np.ndarray
     numerics: Numerics
     outputs: tuple[str, ...]
-    coords: dict[str, np.ndarray]
+    grid: GridFacts = field(repr=False)      # the spec's grid, resolved once
+    costs: np.ndarray = field(repr=False)    # relative cost per point (point_costs)
     blocks: list[np.ndarray] = field(repr=False)
     refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
+    def coords(self) -> dict[str, np.ndarray]:
+        """The values of each axis, in the cube's axis order."""
+        return self.grid.coords
+
+    @property
     def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.coords.values())
+        return self.grid.shape
 
     @property
     def n_points(self) -> int:
@@ -73,10 +78,10 @@ class Plan:
             eff["elasto-plastic phases"] = True
         return eff
 
-    @functools.cached_property
+    @property
     def points(self) -> np.ndarray:
         """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built once."""
-        return grid.points(self.spec)
+        return self.grid.points
 
     def block_points(self, b: int) -> np.ndarray:
         """The ``(k, 4)`` grid points of block ``b`` (columns W, omega, v_ref, vd)."""
@@ -84,9 +89,8 @@ class Plan:
 
 
 def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
-    dither = spec.dither
-    if spec.method == "simulate" and np.all(grid.axis_values(spec, "W") == 0.0):
-        dither = "none"  # no dither anywhere: no switches to step onto, no dither term
+    # the simulate path compiles the dither in effect (none when W = 0 everywhere)
+    dither = spec.grid_facts.dither if spec.method == "simulate" else spec.dither
     return Scene.from_params(p, system=spec.system, friction=spec.friction, dither=dither,
                              path=spec.method, integrator=integrator, outputs=outputs)
 
@@ -126,23 +130,24 @@ def point_costs(spec: Spec, coords: dict[str, np.ndarray]) -> np.ndarray:
 
 def make_plan(spec: Spec, level: str | None = None) -> Plan:
     """Plan ``spec`` (at its own accuracy, or at ``level`` for estimates)."""
-    p = grid.base_params(spec)
+    p = base_params(spec)
     num = numerics(spec, float(p[P.SIGMA0]), level)
     outputs = resolve_outputs(spec.method, spec.outputs)
-    coords = grid.coords(spec)
-    n = math.prod(len(v) for v in coords.values())
+    g = spec.grid_facts
+    costs = point_costs(spec, g.coords)
+    n = math.prod(g.shape)
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
     if spec.method == "simulate" and not spec.block_size:
-        seconds = point_costs(spec, coords).sum() * spec.time.t_end * SECONDS_PER_RADIAN
+        seconds = costs.sum() * spec.time.t_end * SECONDS_PER_RADIAN
         n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
-        blocks = balanced_blocks(point_costs(spec, coords), n_blocks)
+        blocks = balanced_blocks(costs, n_blocks)
     else:
         blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, coords=coords, blocks=blocks)
+                outputs=outputs, grid=g, costs=costs, blocks=blocks)

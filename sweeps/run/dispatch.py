@@ -85,7 +85,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         while queue and len(inflight) < window:
             b = queue.pop()
             future = client.submit(task.compute_block, plan.scene, plan.block_points(b),
-                                   plan.params, plan.numerics.settings, pure=False)
+                                   plan.params, plan.numerics.settings, plan.blocks[b],
+                                   pure=False)
             inflight[future] = b
             done.add(future)
         while filler is not None and not queue and \
@@ -113,7 +114,7 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
         if sink.should_stop():
             break
         sink(b, task.compute_block(plan.scene, plan.block_points(b), plan.params,
-                              plan.numerics.settings))
+                                   plan.numerics.settings, plan.blocks[b]))
         bar.update(len(plan.blocks[b]))
     timings["compute_s"] = time.perf_counter() - t
     bar.close()

@@ -39,13 +39,12 @@ class BlockSink:
         self.stopped: str | None = None              # sweeps.run.lease_holder.CANCELLED / SHUTDOWN / ...
         self._report(force=True)
 
-    def __call__(self, b: int, result: dict) -> None:
-        if "error" in result:
-            log.warning("block %d failed: %s", b, result["error"])
-        payload = {"index": self.plan.blocks[b],
-                   **{k: v for k, v in result.items() if k != "error"}}
-        self.journal.write(b, payload)
-        store.fill_block(self.cube, payload)
+    def __call__(self, b: int, record) -> None:
+        """Block ``b`` finished (its :class:`store.BlockRecord`): journal, cube, progress."""
+        if record.error:
+            log.warning("block %d failed: %s", b, record.error)
+        self.journal.write(b, record)
+        store.fill(self.cube, record)
         self.done.add(b)
         self.blocks_run += 1
         since = time.monotonic() - self.last_publish

@@ -35,9 +35,8 @@ def fig09_cube():
     plan = make_plan(load_spec(data))
     cube = empty_cube(plan)
     for b in range(len(plan.blocks)):
-        result = compute_block(plan.scene, plan.block_points(b), plan.params,
-                               plan.numerics.settings)
-        store.fill_block(cube, {"index": plan.blocks[b], **result})
+        store.fill(cube, compute_block(plan.scene, plan.block_points(b), plan.params,
+                                       plan.numerics.settings, plan.blocks[b]))
     assert np.all(cube["status"].values == store.OK)
     return cube
 

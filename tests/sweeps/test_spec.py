@@ -3,7 +3,6 @@ and what is allowed; the sweep id hashes results-changing content only."""
 import numpy as np
 import pytest
 
-from sweeps.spec import grid
 from sweeps.spec import SpecError, load_spec, parse_spec
 
 BASE = {"name": "t", "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 4}, "omega": [100.0]}}
@@ -79,11 +78,11 @@ def test_hash_ignores_cosmetic_fields_but_not_physics():
 def test_axes_ranges_and_defaults():
     spec = parse_spec({"grid": {"W": {"start": 0, "stop": 3, "num": 4},
                                 "omega": {"start": 10, "stop": 1000, "num": 3, "scale": "log"}}})
-    c = grid.coords(spec)
+    c = spec.grid_facts.coords
     np.testing.assert_allclose(c["W"], [0, 1, 2, 3])
     np.testing.assert_allclose(c["omega"], [10, 100, 1000])
     assert c["v_d"].tolist() == [0.1]          # paper Sec. 5.1 default vd
-    pts = grid.points(spec)
+    pts = spec.grid_facts.points
     assert pts.shape == (12, 4)
     # C order over (W, omega, v_ref, v_d): the flat index is the cube position
     np.testing.assert_allclose(pts[1], [0.0, 100.0, 0.0, 0.1])
@@ -259,7 +258,7 @@ def test_numpy_values_from_the_python_api():
     spec = parse_spec({**BASE, "grid": {"W": np.linspace(0.0, 1.0, 3),
                                         "omega": (np.float64(100.0),)},
                        "params": {"sigma0": np.float64(150.0)}})
-    assert grid.coords(spec)["W"].tolist() == [0.0, 0.5, 1.0]
+    assert spec.grid_facts.coords["W"].tolist() == [0.0, 0.5, 1.0]
 
 
 # --- files ------------------------------------------------------------------------------
