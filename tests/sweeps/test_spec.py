@@ -336,3 +336,23 @@ def test_example_specs_still_validate():
         warnings.simplefilter("error", SpecWarning)
         for path in specs:
             load_spec(path)
+
+
+def test_the_grid_is_resolved_once_per_spec(monkeypatch):
+    """Parsing, planning (at every level), the error estimate's finer numerics and the
+    plan's points all read the one GridFacts of the spec (issue 27: the axes were built
+    about six times per submit, the full mesh once more for the time estimate)."""
+    from sweeps.estimates.error_estimate import finer_numerics
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec.grid import GridFacts
+
+    built = []
+    real = GridFacts.of.__func__
+    monkeypatch.setattr(GridFacts, "of",
+                        classmethod(lambda cls, spec: built.append(1) or real(cls, spec)))
+    spec = parse_spec({**BASE, "accuracy": "draft", "dither": "square-velocity",
+                       "grid": {"W": [0.0, 0.5], "omega": [100.0, 300.0], "v_ref": [0.4]}})
+    plans = [make_plan(spec, level) for level in (None, "draft", "standard", "reference")]
+    finer_numerics(plans[0])
+    assert plans[0].points is plans[1].points is spec.grid_facts.points
+    assert len(built) == 1
