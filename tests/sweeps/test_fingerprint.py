@@ -80,11 +80,92 @@ def run(capsys, *args) -> tuple[int, str, str]:
     return code, out, err
 
 
-def test_a_planning_module_edit_changes_the_results_fingerprint(monkeypatch):
-    """sweeps/accuracy.py's level tables change results as surely as an engine edit."""
-    before = version.results_fingerprint()
-    monkeypatch.setattr(version, "_PLANNING_HASH", "edited accuracy tables")
-    assert version.results_fingerprint() != before
+def source_copy(tmp_path):
+    """A copy of the three packages, for edits the real tree never sees."""
+    skip = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for package in version.PACKAGES:
+        shutil.copytree(version.ROOT / package, tmp_path / package, ignore=skip)
+    return tmp_path
+
+
+def fingerprint_of_copy(root):
+    return version.fingerprint_of(root, provenance.source_hash(root / "engine"))
+
+
+def test_every_module_on_the_computing_path_is_in_the_results_fingerprint(tmp_path):
+    """The path is found, not listed (sweeps.version): an edit of any module it holds --
+    here a comment appended, the smallest edit -- changes the fingerprint. The module that
+    escaped the hand-kept list before (the refinement's lattices, moved out of refine.py
+    without being added) is on it."""
+    root = source_copy(tmp_path)
+    before = fingerprint_of_copy(root)
+    assert before == version.results_fingerprint()
+    path = version.computing_path(root)
+    import sweeps.planning.lattice as lattice
+    assert lattice.__name__ in path and set(version.ENTRY_MODULES) <= set(path)
+    for name, file in sorted(path.items()):
+        original = file.read_bytes()
+        file.write_bytes(original + b"\n# an edit\n")
+        assert fingerprint_of_copy(root) != before, f"{name} is not in the fingerprint"
+        file.write_bytes(original)
+    assert fingerprint_of_copy(root) == before
+
+
+def test_a_module_off_the_computing_path_leaves_the_fingerprint(tmp_path):
+    """The command line's help text and the read side's maps make no number of a cube: an
+    edit there keeps every sweep current."""
+    root = source_copy(tmp_path)
+    before = fingerprint_of_copy(root)
+    for rel in ("sweeps/cli/main.py", "store/maps.py"):
+        assert not any(p == root / rel for p in version.computing_path(root).values())
+        file = root / rel
+        text = file.read_text()
+        assert "help=" in text or rel != "sweeps/cli/main.py"
+        file.write_text(text.replace('help="', 'help="(edited) ', 1) + "# an edit\n")
+        assert fingerprint_of_copy(root) == before, rel
+
+
+# Run in a fresh interpreter: the front (API, spec loading) is imported first; every module
+# of ours that planning, a worker's block, refinement, journaling and publishing then load
+# must be on the computing path.
+LOADED_BY_A_RUN = """
+import json, sys, warnings
+import sweeps.api, sweeps.lookup, sweeps.spec.load
+from sweeps.spec import parse_spec
+chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
+                    "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
+                             "v_ref": {{"start": 0.05, "stop": 1.0, "num": 9}}}}}})
+sim = parse_spec({{"name": "s", "friction": "lugre", "accuracy": "draft",
+                  "time": {{"t_end": 2.0, "t_transient": 1.0}},
+                  "grid": {{"W": [0.0, 0.5], "omega": [100.0], "v_ref": [0.1]}}}})
+before = set(sys.modules)
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    sweeps.api.run_sweep(chart, store={store!r}, progress=False)
+    from sweeps.planning.plan import make_plan
+    from sweeps.workers import task
+    plan = make_plan(sim)
+    out = task.compute_block(plan.scene, plan.block_points(0), plan.params,
+                             plan.numerics.settings)
+    assert (out["status"] == 0).all(), out
+print(json.dumps(sorted(set(sys.modules) - before)))
+"""
+
+
+def test_the_computing_path_holds_every_module_a_run_loads(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    code = LOADED_BY_A_RUN.format(store=str(tmp_path / "store"))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    ours = {m for m in json.loads(proc.stdout.splitlines()[-1])
+            if m.split(".")[0] in version.PACKAGES}
+    assert {"sweeps.run.submit", "sweeps.workers.task", "engine.batch", "store.journal"} <= ours, ours
+    missing = sorted(ours - set(version.computing_path()))
+    assert not missing, f"loaded by a run but not in the results fingerprint: {missing}"
 
 
 def test_resubmission_after_an_engine_change_recomputes_and_the_old_cube_is_stale(
