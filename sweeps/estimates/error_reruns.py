@@ -41,9 +41,9 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None) 
 
 class SampleRuns:
     """The error sample's re-runs one accuracy level finer, one task per point
-    (sweeps.estimates.error_estimate), costliest first, submitted one by one: a refined sweep hands them
+    (error_estimate.py), costliest first, submitted one by one: a refined sweep hands them
     to the dispatch as filler for the workers idling at the tail of each level (its
-    sample is known before its first level ends: sweeps.estimates.error_estimate.sample)."""
+    sample is known before its first level ends: error_estimate.sample)."""
 
     def __init__(self, plan: Plan):
         self.plan, self.finer = plan, errest.finer_numerics(plan)

@@ -1,5 +1,5 @@
-"""Running a refined sweep (``refine = true``; sweeps.planning.refine): level after level through the
-same blocks, journal, lease and dask dispatch as an exhaustive sweep.
+"""Running a refined sweep (``refine = true``; sweeps.planning.refine): level after level
+through the same blocks, journal, lease and dask dispatch as an exhaustive sweep.
 
 A refined plan starts with no blocks. :func:`replay` rebuilds the refinement from what the
 cube (rebuilt from the journal) already holds: level by level it asks for the next points,

@@ -36,7 +36,7 @@ class BlockSink:
         self.last_publish, self.publish_s = time.monotonic(), 0.0
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
-        self.stopped: str | None = None              # sweeps.run.lease_holder.CANCELLED / SHUTDOWN / ...
+        self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
         self._report(force=True)
 
     def __call__(self, b: int, record) -> None:
