@@ -47,7 +47,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import store  # noqa: E402
-from sweeps import task as sweeps_task  # noqa: E402
+from sweeps.workers import task as sweeps_task  # noqa: E402
 from sweeps.planning.plan import make_plan  # noqa: E402
 from sweeps.spec import load_spec  # noqa: E402
 

@@ -104,7 +104,7 @@ def study_crossover(quick: bool) -> dict:
 
 def _levels_both(plan, ref, queried) -> dict:
     """Each level's DP5 settings and the stiff method's settings, at this sigma0."""
-    from sweeps import accuracy as A
+    from sweeps.spec import accuracy as A
     out = {}
     for level in A.LEVELS:
         out[level] = {}

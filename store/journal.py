@@ -20,6 +20,8 @@ moved to ``journal/bad/`` with one warning line and its points are computed agai
 Blocks without a checksum (journals written before checksums existed, or files
 written by another program) are treated the same way: they cannot be verified, so
 they are set aside and recomputed rather than trusted.
+A block may also hold ``_engine``, inside the checksum: the record's ``fingerprint``, the
+results fingerprint of the worker that computed it (``Journal.load(b).fingerprint``).
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from .points import fill
 from .record import BlockRecord
 
 CHECKSUM = "_sha256"
+ENGINE = "_engine"   # the results fingerprint of the worker that computed the block (ASCII)
 BAD_DIR = "bad"
 _NAME = re.compile(r"^block-(\d+)\.npz$")
 
@@ -93,12 +96,13 @@ class Journal:
 
     def write(self, block_id: int, record: BlockRecord) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
-        checksum. Free space is checked first (``store.errors.NoSpaceError``).
-
-        Writing a block again replaces it. Returns the file's path.
-        """
+        checksum and the record's ``fingerprint`` (the engine that computed it; none if
+        None). Free space is checked first (``store.errors.NoSpaceError``). Writing a block
+        again replaces it. Returns the file's path."""
         path = self.path(block_id)
         arrays = record.arrays()
+        if record.fingerprint is not None:
+            arrays[ENGINE] = np.frombuffer(record.fingerprint.encode("ascii"), np.uint8)
         buf = io.BytesIO()
         np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
         return atomic_write(path, buf.getbuffer())
@@ -128,10 +132,14 @@ class Journal:
                            "another program)")
         if not np.array_equal(stored, checksum(block_id, arrays)):
             raise BadBlock("checksum mismatch (the file changed after it was written)")
+        engine = arrays.pop(ENGINE, None)
         try:
-            return BlockRecord.from_arrays(arrays, strict=True)
+            record = BlockRecord.from_arrays(arrays, strict=True)
         except ValueError as err:
             raise BadBlock(_brief(err)) from None
+        record.fingerprint = None if engine is None else engine.tobytes().decode("ascii",
+                                                                                 "replace")
+        return record
 
     def read(self, blocks: Sequence[np.ndarray] | None = None, repair: bool = True
              ) -> Iterator[tuple[int, BlockRecord]]:

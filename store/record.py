@@ -16,6 +16,11 @@ evals      int64    right-hand-side evaluations per point
 outputs    float64  output name -> ``(n,)``, or ``(n, k)`` for a vector output such as
                     ``alpha_hist``
 =========  =======  ==========================================
+
+Two fields are not per point: ``error`` (why a whole block failed; logged, not journaled)
+and ``fingerprint``, the results fingerprint of the process that computed the block
+(sweeps.version): the submitter journals only blocks carrying its own (sweeps.run.sink),
+and the journal keeps it in the block file (``_engine``).
 """
 from __future__ import annotations
 
@@ -36,7 +41,8 @@ FIELDS = {
 @dataclass
 class BlockRecord:
     """The results of one block of ``n`` points (module docstring). Arrays are converted
-    to the field dtypes when made; ``error`` (not journaled) says why a whole block failed."""
+    to the field dtypes when made; ``error`` says why a whole block failed, ``fingerprint``
+    which engine computed it (None: not recorded)."""
 
     index: np.ndarray
     status: np.ndarray
@@ -45,6 +51,7 @@ class BlockRecord:
     evals: np.ndarray
     outputs: dict[str, np.ndarray] = field(default_factory=dict)
     error: str = ""
+    fingerprint: str | None = None
 
     def __post_init__(self):
         index = np.asarray(self.index)
@@ -89,16 +96,21 @@ class BlockRecord:
                    outputs={k: v for k, v in arrays.items() if k not in FIELDS})
 
     @classmethod
-    def failed(cls, index, outputs: Sequence[str], error: str, status: int) -> BlockRecord:
+    def failed(cls, index, outputs: Sequence[str], error: str, status: int,
+               fingerprint: str | None = None) -> BlockRecord:
         """A block whose computation raised: every point ``status``, outputs NaN."""
         n = len(index)
         return cls(index, np.full(n, status), np.zeros(n), np.zeros(n), np.zeros(n),
-                   {name: np.full(n, np.nan) for name in outputs}, error=error)
+                   {name: np.full(n, np.nan) for name in outputs}, error=error,
+                   fingerprint=fingerprint)
 
     @classmethod
     def concatenate(cls, records: Sequence[BlockRecord]) -> BlockRecord:
-        """One record of several blocks' points, in order."""
+        """One record of several blocks' points, in order (their fingerprint if they all
+        carry the same one, else None)."""
         first = records[0]
+        prints = {r.fingerprint for r in records}
         return cls(*(np.concatenate([getattr(r, k) for r in records]) for k in FIELDS),
                    outputs={k: np.concatenate([r.outputs[k] for r in records])
-                            for k in first.outputs})
+                            for k in first.outputs},
+                   fingerprint=prints.pop() if len(prints) == 1 else None)

@@ -145,8 +145,11 @@ SWEEPS_CHAIN = (
     "run",         # submit: lease, sink, journal, dispatch, refined levels, outcome
     "service",     # the queue: enqueue, serve, cancel
     "lookup",      # a sweep by id / prefix / name, stale notes
+    "overview",    # the sweeps of a store as plain data (status --format json, the web view)
     "api",         # run_sweep, open_sweep
     "gallery",     # the paper's figures as scenes
+    "exports",     # query's text and map's drawing, for the command line and the web view
+    "web",         # the read-only web view (ditherlab web, serve --web)
     "cli",         # the ditherlab command line
 )
 

@@ -1,14 +1,16 @@
 """The ``ditherlab`` command line (DESIGN.md §5): the parser, and the promise that every
 fault ends in one line.
 
-    ditherlab submit SPEC.toml [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
-                               [--detach]
-    ditherlab serve [--store DIR] [--scheduler ADDR | --workers N] [--dashboard ADDR]
-    ditherlab status [SWEEP]
+    ditherlab submit SPEC.toml [--store DIR] [--scheduler ADDR | --workers N
+                               | --cluster slurm|pbs|sge [--jobs N]] [--dashboard ADDR] [--detach]
+    ditherlab serve [--store DIR] [--scheduler ADDR | --workers N | --cluster KIND [--jobs N]]
+                    [--dashboard ADDR]
+    ditherlab status [SWEEP] [--format table|json]
     ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
     ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE
     ditherlab plan SPEC.toml [--record]
+    ditherlab web [--bind HOST:PORT] [--token-file F];  serve --web HOST:PORT
     ditherlab --version;  -v / -q on every command
 
 Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments) was refused,
@@ -24,6 +26,7 @@ from contextlib import contextmanager
 
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
 from .scenes import add_commands as add_scene_commands
+from ..web.cli import add_commands as add_web_commands
 from .reading import cmd_map, cmd_query, cmd_status
 from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
 
@@ -74,6 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("status", parents=[common], help="list sweeps, or show one")
     p.add_argument("sweep", nargs="?")
+    p.add_argument("--format", choices=("table", "json"), default="table",
+                   help="json: the data the web view shows (docs/WEB.md)")
     p.set_defaults(func=cmd_status)
 
     p = sub.add_parser("query", parents=[common], help="print a cube's values")
@@ -94,13 +99,18 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("plan", parents=[common],
                        help="what a spec will run, and its cost per accuracy level")
     p.add_argument("spec", nargs="?", help="spec file (.toml or .json); or --scene NAME")
-    p.add_argument("--workers", type=int, default=2)
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=2)
+    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+                       help="estimate for batch jobs (their start-up counted)")
+    p.add_argument("--jobs", type=int, default=4, metavar="N", help="with --cluster")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
     p.add_argument("--record", action="store_true",
                    help="remember the estimates in the store, so that the next plan says how "
                    "far off they were (plan writes nothing otherwise)")
     p.set_defaults(func=cmd_plan)
     add_scene_commands(sub, common)   # scenes, gallery, --scene (sweeps.cli.scenes)
+    add_web_commands(sub, common)     # web, serve --web (sweeps.web.cli)
     return ap
 
 
@@ -108,6 +118,12 @@ def _cluster_options(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
     where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
+    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+                       help="workers as batch jobs through dask-jobqueue, configured the dask "
+                       "way (jobqueue.KIND.* : docs/BATCH.md)")
+    p.add_argument("--jobs", type=int, default=4, metavar="N",
+                   help="with --cluster: at most N batch jobs, one single-threaded worker each "
+                   "(never more than blocks to compute; default 4)")
     p.add_argument("--dashboard", metavar="ADDR",
                    help="start the local cluster's dask dashboard at ADDR (e.g. :8787; needs "
                    "bokeh) and print its link; default: no dashboard")
@@ -140,9 +156,10 @@ def main(argv: list[str] | None = None) -> int:
     README (0 ok, 1 failed, 2 refused, 130 interrupted), never a traceback
     (``DITHERLAB_DEBUG=1`` shows the traceback of an unexpected error)."""
     args = build_parser().parse_args(argv)
-    if getattr(args, "workers", 1) is not None and getattr(args, "workers", 1) < 1:
-        print("ditherlab: --workers must be >= 1", file=sys.stderr)
-        return EXIT_REFUSED
+    for option in ("workers", "jobs"):
+        if getattr(args, option, 1) is not None and getattr(args, option, 1) < 1:
+            print(f"ditherlab: --{option} must be >= 1", file=sys.stderr)
+            return EXIT_REFUSED
     verbosity = -1 if getattr(args, "quiet", False) else int(getattr(args, "verbose", False))
     with _one_line_warnings(verbosity):
         try:
@@ -238,6 +255,7 @@ def _one_line_warnings(verbosity: int = 0):
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(_OneLine())
     logger = logging.getLogger("ditherlab")
+    level = logger.level
     logger.setLevel({-1: logging.WARNING, 0: logging.INFO, 1: logging.DEBUG}[verbosity])
     saved = warnings.showwarning
     warnings.showwarning = show
@@ -247,6 +265,7 @@ def _one_line_warnings(verbosity: int = 0):
     finally:
         warnings.showwarning = saved
         logger.removeHandler(handler)
+        logger.setLevel(level)   # a command run in-process leaves the caller's logging as it was
 
 
 

@@ -6,11 +6,11 @@ store path that does not exist stays absent and a read-only store works.
 from __future__ import annotations
 
 import json
-import math
 import sys
 from pathlib import Path
 
 from ..errors import RefusedError
+from ..exports import draw_map, query_text
 from ..lookup import (STALE, catalogue, check_cube_of, inferred_note, is_stale, resolve_sweep,
                       stale_note, store_root)
 
@@ -39,15 +39,6 @@ def _number(axis: str, value: str) -> float:
         raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
 
 
-def _json_value(x):
-    """A table cell for JSON: full precision (repr), NaN (not computed) as null, an
-    infinite value (omega = inf, the averaged limit) as the string "inf" / "-inf"."""
-    if isinstance(x, float):
-        return None if x != x else ("inf" if x == math.inf else "-inf" if x == -math.inf
-                                    else x)
-    return x
-
-
 def _warn_stale(root: Path, sweep_id: str, ds) -> None:
     """One stderr line when the sweep being served is stale (query, map)."""
     note = stale_note(catalogue(root).get(sweep_id), ds, root)
@@ -61,6 +52,8 @@ def cmd_status(args) -> int:
     from ..service import queue_hint
 
     root = store_root(args.store)
+    if getattr(args, "format", "table") == "json":
+        return _status_json(root, args.sweep)
     cat = catalogue(root)
     if args.sweep:
         sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
@@ -99,6 +92,22 @@ def cmd_status(args) -> int:
     hint = queue_hint(cat, rows)
     if hint:
         print(hint)
+    return 0
+
+
+def _status_json(root: Path, key: str | None) -> int:
+    """``status --format json``: the data the web view's pages show (sweeps.overview)."""
+    from ..overview import store_summary, sweep_detail
+
+    if key:
+        sweep_id, cube = resolve_sweep(root, key, need_cube=False)
+        ds = _header(cube) if cube.exists() else None
+        if ds is not None:
+            check_cube_of(ds, sweep_id, cube)
+        data = sweep_detail(root, sweep_id, ds)
+    else:
+        data = store_summary(root)
+    print(json.dumps(data, indent=1))
     return 0
 
 
@@ -208,19 +217,9 @@ def cmd_query(args) -> int:
     check_cube_of(ds, sweep_id, cube)
     _warn_stale(root, sweep_id, ds)
     _warn_accuracy(ds)
-    try:
-        df = store.table(ds, var=args.var, sel=sel)
-        warn_inferred(ds, args.sel)
-    except ValueError as exc:
-        raise RefusedError(str(exc)) from None
-    if args.format == "csv":
-        sys.stdout.write(df.to_csv(index=False))
-    elif args.format == "json":   # not DataFrame.to_json: it rounds to 10 decimals, inf -> null
-        rows = [{k: _json_value(v) for k, v in row.items()}
-                for row in df.to_dict(orient="records")]
-        print(json.dumps(rows, indent=1))
-    else:
-        print(df.to_string(index=False))
+    text = query_text(ds, args.var, sel, args.format)
+    warn_inferred(ds, args.sel)
+    sys.stdout.write(text)
     return 0
 
 
@@ -242,35 +241,12 @@ def open_for_map(args):
     return ds
 
 
-MAP_AXES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W")}   # a map's own plane
-
-
-def _refuse_map_axes(kind: str, sel: dict, ds) -> None:
-    """``--sel`` of an axis the map is drawn over (with more than one value in ``ds``) is
-    refused, not drawn as a one-column map (a stability cut labelled alone would also lose
-    its PU link to W = 0)."""
-    plane = MAP_AXES.get(kind, ())
-    fixed = [axis for axis in sel if axis in plane and ds.sizes[axis] > 1]
-    if fixed:
-        raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {kind} map "
-                           f"({' x '.join(plane)}), not a value to fix; `ditherlab query` "
-                           f"reads a cut through it")
-
-
 def cmd_map(args) -> int:
-    import store
-
     sel = parse_sel(args.sel)   # a malformed selection is refused before the store is read
     ds = open_for_map(args)
-    _refuse_map_axes(args.kind, sel, ds)
-    draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
-            "friction": store.friction_curves}[args.kind]
-    try:
-        draw(ds, args.output, sel=sel)
-        if args.kind == "friction":   # curves of values, not a map of classes
-            warn_inferred(ds, args.sel)
-    except ValueError as exc:
-        raise RefusedError(str(exc)) from None
+    draw_map(ds, args.kind, sel, args.output)
+    if args.kind == "friction":   # curves of values, not a map of classes
+        warn_inferred(ds, args.sel)
     print(f"wrote {args.output}")
     return 0
 

@@ -31,7 +31,7 @@ def cmd_submit(args) -> int:
     if args.detach:
         return _submit_detached(plan, root)
     try:
-        res = submit(plan, root, scheduler=args.scheduler, workers=args.workers,
+        res = submit(plan, root, scheduler=args.scheduler, workers=_workers(args),
                      progress=not args.quiet, dashboard=args.dashboard)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; {_kept(plan, root)}; "
@@ -85,8 +85,29 @@ def _submit_detached(plan, root: Path) -> int:
 def cmd_serve(args) -> int:
     from ..service import serve
 
-    return serve(store_root(args.store), scheduler=args.scheduler, workers=args.workers,
+    return serve(store_root(args.store), scheduler=args.scheduler, workers=_workers(args),
                  progress=False, dashboard=args.dashboard)
+
+
+def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
+    """The workers a plan's estimate counts, and the start-up it adds: a batch run's jobs
+    (no more than blocks) start in JOB_START_S on an idle queue (sweeps.workers.batch)."""
+    if not args.cluster or plan.path != "simulate":
+        return args.workers, (0.0, "; cluster start comes on top")
+    from ..workers.batch import JOB_START_S
+
+    jobs = max(1, min(args.jobs, len(plan.blocks)))
+    return jobs, (JOB_START_S, f" on {jobs} {args.cluster} jobs, plus {JOB_START_S:.0f} s of "
+                               "job start-up (an idle queue; a busy one adds its wait)")
+
+
+def _workers(args):
+    """``--workers N`` local processes, or ``--cluster KIND --jobs N`` batch jobs."""
+    if not args.cluster:
+        return args.workers
+    from ..workers.batch import BatchWorkers
+
+    return BatchWorkers(args.cluster, args.jobs)
 
 
 def cmd_cancel(args) -> int:
@@ -142,12 +163,13 @@ def cmd_plan(args) -> int:
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
               f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
     print(f"outputs    {', '.join(plan.outputs)}")
-    print(f"estimates  (calibrated now on this machine, {args.workers} workers, compute "
-          f"phase; cluster start and first compilation come on top)")
-    found = estimates(spec, workers=args.workers)
+    workers, start = _plan_workers(args, plan)
+    print(f"estimates  (calibrated now on this machine, {workers} workers, compute "
+          f"phase{start[1]}; first compilation comes on top)")
+    found = estimates(spec, workers=workers)
     for est in found:
         print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
-              f"per point  ->  {format_seconds(est.wall_s)} wall")
+              f"per point  ->  {format_seconds(est.wall_s + start[0])} wall")
     root = store_root(args.store)
     previous = history.last_comparison(root)
     if previous:

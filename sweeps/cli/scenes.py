@@ -92,12 +92,10 @@ def _w_list(items) -> list[str]:
 def _map_picked(args) -> int:
     """``map --kind friction`` with a handful of W curves: ``--pick N`` evenly spread, or
     the repeated ``--sel W=...`` (each the nearest grid value)."""
-    import numpy as np
-
     import store
 
+    from ..exports import draw_map, pick_w
     from .reading import cmd_map, open_for_map, parse_sel, warn_inferred
-    from ..gallery.scenes import shrink
 
     if args.kind != "friction" and args.pick is not None:
         raise RefusedError(f"--pick applies to --kind friction only (curves of W), not to "
@@ -110,9 +108,8 @@ def _map_picked(args) -> int:
     if args.pick is not None and args.pick < 1:
         raise RefusedError(f"--pick: must be >= 1, got {args.pick}")
     ds = open_for_map(args)
-    grid = np.sort(ds.W.values)
     if args.pick is not None:
-        keep = shrink(list(grid), args.pick)
+        keep = pick_w(ds, args.pick)
     else:
         try:   # each the nearest grid value, off the grid refused as by query
             keep = sorted({float(store.select(ds, parse_sel([w]))["W"].values[0])
@@ -120,21 +117,23 @@ def _map_picked(args) -> int:
         except ValueError as exc:
             raise RefusedError(str(exc)) from None
     rest = [s for s in args.sel or () if s not in wanted]
-    try:
-        store.friction_curves(ds.sel(W=keep), args.output, sel=parse_sel(rest))
-        warn_inferred(ds.sel(W=keep), rest)   # curves are values: inferred ones are said
-    except ValueError as exc:
-        raise RefusedError(str(exc)) from None
+    draw_map(ds.sel(W=keep), "friction", parse_sel(rest), args.output)
+    warn_inferred(ds.sel(W=keep), rest)   # curves are values: inferred ones are said
     print(f"wrote {args.output} (W = {', '.join(f'{w:g}' for w in keep)})")
     return 0
 
 
 def cmd_scenes(args) -> int:
+    from ..gallery.build import RECIPES
+
     print(f"{'scene':<15}{'small':>8}{'full':>8}  paper")
     for s in REGISTRY.values():
         print(f"{s.name:<15}{s.n_points('small'):>8}{s.n_points('full'):>8}  {s.ref}")
-    print("\nrun one: ditherlab submit --scene NAME [--size small|full]; "
-          "all figures: ditherlab gallery")
+    print("\nrun one: ditherlab submit --scene NAME [--size small|full]\n")
+    print(f"{'figure':<15}how it is computed (ditherlab gallery --only FIGURE)")
+    for key, recipe in RECIPES.items():
+        print(f"{key:<15}{recipe}")
+    print("\nall figures: ditherlab gallery [--size small|full] [-o DIR]")
     return 0
 
 

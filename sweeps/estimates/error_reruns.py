@@ -20,14 +20,16 @@ from ..planning.plan import Plan
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
 
 
-def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None) -> None:
+def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
+                  display=None) -> None:
     """The error estimate of a finished simulated sweep, into its ``cube`` (in memory) and
     ``<sweep>/error_estimate.json`` (``sweep``: its ``store.SweepDir``); a failure is
     recorded as a warning, never lost. ``started``: a :class:`SampleRuns` some of whose
-    re-runs are already submitted."""
+    re-runs are already submitted; ``display(phase, total, unit)``: a progress bar that
+    counts the re-runs as they finish (sweeps.run.phases.bar), or None."""
     t = time.perf_counter()
     try:
-        estimate = _error_estimate(plan, client, cube, started)
+        estimate = _error_estimate(plan, client, cube, started, display)
     except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
         estimate = {"compared_with": None, "level": plan.numerics.label,
                     "sample_points": 0, "change": {}, "promise": {},
@@ -66,23 +68,35 @@ class SampleRuns:
                                         self.finer.settings, self.index[i:i + 1], pure=False)
         return True
 
-    def gather(self, client) -> BlockRecord:
-        """Every re-run's result, in sample order (the rest submitted now)."""
+    def gather(self, client, tick=None) -> BlockRecord:
+        """Every re-run's result, in sample order, as one record (the rest submitted
+        now); ``tick()`` once per re-run as it finishes."""
+        from distributed import as_completed
+
         while self.submit_next(client):
             pass
-        return BlockRecord.concatenate(
-            client.gather([self.futures[i] for i in range(len(self.order))]))
+        futures = [self.futures[i] for i in range(len(self.order))]
+        for _ in as_completed(futures, loop=client.loop):
+            if tick is not None:
+                tick()
+        return BlockRecord.concatenate(client.gather(futures))
 
     def cancel(self, client) -> None:
         client.cancel(list(self.futures.values()))
 
 
-def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None) -> dict:
+def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
+                    display=None) -> dict:
     """Gather the finer re-runs of the error sample (all submitted now unless some were
     ``started``) and compare."""
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
-    return errest.compare(plan, cube, index, runs.gather(client), finer.label)
+    if display is None:
+        result = runs.gather(client)
+    else:
+        with display("error estimate", len(runs.order), "re-run") as bar:
+            result = runs.gather(client, tick=bar.update)
+    return errest.compare(plan, cube, index, result, finer.label)
 
 
 def _write_json(path: Path, data: dict) -> None:

@@ -41,6 +41,14 @@ def record_actual(root: Path, sweep_id: str, level: str, wall_s: float) -> None:
         _save(root, data)
 
 
+def recorded(root: Path, sweep_id: str) -> dict:
+    """What ``plan --record`` estimated for ``sweep_id`` (wall seconds per level) and what
+    ``submit`` measured at the level it ran: ``{"estimated_s": {...}, "actual_s": {...}}``,
+    empty when ``plan`` was never asked to record it. Reads only."""
+    row = _load(root).get(sweep_id) or {}
+    return {k: dict(row[k]) for k in ("estimated_s", "actual_s") if isinstance(row.get(k), dict)}
+
+
 def last_comparison(root: Path) -> str | None:
     """One line on the newest estimate that has a measured counterpart."""
     rows = [(v["when"], k, v) for k, v in _load(root).items() if v.get("actual_s")]

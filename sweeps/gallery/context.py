@@ -2,7 +2,7 @@
 which its scene sweeps run (so a later ``ditherlab map --scene`` finds them)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .scenes import check_size, get_scene
@@ -20,10 +20,45 @@ class Context:
     workers: int = 2
     client: object = None
     progress: bool = False
+    #: a deliberately wrong model for the rules' own tests (tests/gallery/test_wrong_models):
+    #: parameter overrides for every engine computation (simulation and averaged theory
+    #: alike: a shared error), ``W_scale`` multiplying every dither amplitude the engine sees
+    model: dict = field(default_factory=dict)
+    #: overrides for the averaged theory only (e.g. a perturbed g: ``{"fs": 1.6}``)
+    theory: dict = field(default_factory=dict)
 
     def __post_init__(self):
         check_size(self.size)
         self.outdir = Path(self.outdir)
+
+    @property
+    def physics(self) -> dict:
+        """The model overrides that are parameters (``W_scale`` is not)."""
+        return {k: v for k, v in self.model.items() if k != "W_scale"}
+
+    @property
+    def W_scale(self) -> float:
+        return float(self.model.get("W_scale", 1.0))
+
+    @property
+    def run_model(self) -> tuple:
+        """The model overrides as a hashable tuple (trajectories.run's ``model``)."""
+        return tuple(sorted(self.model.items()))
+
+    def pack(self, defaults=None, **values):
+        """``engine.params.pack`` with the model's overrides (a simulation's parameters)."""
+        from engine import params as P
+
+        if "W" in values:
+            values["W"] = values["W"] * self.W_scale
+        return P.pack(defaults, **{**values, **self.physics})
+
+    def theory_pack(self, defaults=None, **values):
+        """Parameters of the averaged theory: the model's and the theory's overrides (the
+        theory takes W as an argument: scale it with :attr:`W_scale` where it is passed)."""
+        from engine import params as P
+
+        return P.pack(defaults, **{**values, **self.physics, **self.theory})
 
     @property
     def small(self) -> bool:
@@ -33,8 +68,13 @@ class Context:
         return self.outdir / f"{key}.png"
 
     def spec(self, scene: str) -> dict:
-        """The scene's spec at this size (the one source of the figure's parameters)."""
-        return get_scene(scene).spec(self.size)
+        """The scene's spec at this size (the one source of the figure's parameters), with
+        the model's parameter overrides (none but in the rules' own tests)."""
+        spec = get_scene(scene).spec(self.size)
+        if self.physics:
+            spec["params"] = {**spec.get("params", {}), **self.physics}
+            spec["name"] += "-wrong-model"
+        return spec
 
     def sweep(self, scene: str):
         """Run (or reuse) the scene's sweep at this size; its cube as an xarray.Dataset."""

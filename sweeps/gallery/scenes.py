@@ -31,6 +31,9 @@ class GalleryScene:
     spec_file : file name in ``specs/``.
     small : grid counts of the small size, axis -> count.
     params : parameter overrides of a variant (empty for the paper's own scenes).
+    refine : the spec's ``refine`` for the scene (sweeps.refine): Fig. 14's zone map is
+        computed refined, which reproduces the exhaustive map cell for cell at 31 x 31
+        (README, scripts/bench_maps.py) at an eighth of the points.
     """
 
     name: str
@@ -38,6 +41,7 @@ class GalleryScene:
     spec_file: str
     small: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    refine: bool = False
 
     def spec(self, size: str = "full") -> dict:
         """The spec as a dict (``sweeps.load_spec`` takes it) at ``size``."""
@@ -46,6 +50,8 @@ class GalleryScene:
         data["name"] = self.name if size == "full" else f"{self.name}-{size}"
         if self.params:
             data["params"] = {**data.get("params", {}), **self.params}
+        if self.refine:
+            data["refine"] = True
         if size == "small":
             for axis, count in self.small.items():
                 data["grid"][axis] = shrink(data["grid"][axis], count)
@@ -66,9 +72,9 @@ REGISTRY: dict[str, GalleryScene] = {s.name: s for s in (
     GalleryScene("fig10", "Fig. 10, Sec. 6, Eqs. 6.1-6.3 (LuGre slider, square dither)",
                  "fig10.toml", small={"v_d": 1}),
     GalleryScene("fig14", "Fig. 14, Sec. 7, Eqs. 2.3, 2.6-2.7 (elasto-plastic, sine dither)",
-                 "fig14.toml", small={"W": 7, "omega": 7}),
+                 "fig14.toml", small={"W": 7, "omega": 7}, refine=True),
     GalleryScene("fig14-lam0.5", "beyond Fig. 14: lam = z_ba/z_ss = 0.5 (Eq. 2.6)",
-                 "fig14.toml", small={"W": 7, "omega": 7}, params={"lam": 0.5}),
+                 "fig14.toml", small={"W": 7, "omega": 7}, params={"lam": 0.5}, refine=True),
 )}
 
 

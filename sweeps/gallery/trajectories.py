@@ -52,18 +52,23 @@ class Trajectory:
 def run(*, friction: str = "elastoplastic", dither: str = "sine-velocity", W: float = 0.0,
         omega: float = 100.0, v_ref: float = 0.1, slow=(1.7, 0.3), vd: float = 0.1,
         lam: float = 0.8, t_end: float = 100.0, t_transient: float = 0.0,
-        dt: float | None = None, settings: Settings = SETTINGS) -> Trajectory:
+        dt: float | None = None, settings: Settings = SETTINGS, model: tuple = ()) -> Trajectory:
     """One slider trajectory from rest, sampled every ``dt`` (default: 16 samples per
     dither period, or 0.01 tau without dither).
 
     ``dither = "none"`` is used whenever ``W == 0`` (no dither, whatever the kind).
+    ``model``: (name, value) overrides of a deliberately wrong model (Context.run_model;
+    ``W_scale`` multiplies W).
     """
+    over = dict(model)
+    W = W * float(over.pop("W_scale", 1.0))
     if W == 0.0:
         dither = "none"
     if dt is None:
         dt = 2 * np.pi / omega / 16 if dither != "none" else 0.01
-    p = P.pack(W=W, omega=omega if dither != "none" else 0.0, v_ref=v_ref, slow_a=slow[0],
-               slow_omega=slow[1], vd=vd, lam=lam, t_end=t_end, t_transient=t_transient)
+    p = P.pack(**{"W": W, "omega": omega if dither != "none" else 0.0, "v_ref": v_ref,
+                  "slow_a": slow[0], "slow_omega": slow[1], "vd": vd, "lam": lam,
+                  "t_end": t_end, "t_transient": t_transient, **over})
     outputs = EP_OUTPUTS if friction == "elastoplastic" else LUGRE_OUTPUTS
     scene = Scene.from_params(p, friction=friction, dither=dither, integrator="dopri5",
                               outputs=outputs)

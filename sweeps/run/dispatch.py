@@ -10,9 +10,14 @@ from contextlib import nullcontext
 
 from ..workers import task
 from ..workers.cluster import dask_client
+from ..workers.matching import matched
 from ..planning.plan import Plan
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
+from . import phases
 from .sink import BlockSink
+
+REFRESH_S = 2.0    # how often the dispatch looks at the workers again
+TICK_S = 0.02      # how often it looks for finished blocks
 
 
 def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
@@ -27,7 +32,7 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
     t = time.perf_counter()
     with (nullcontext(client) if client is not None
           else dask_client(scheduler, workers, dashboard)) as cluster_client:
-        client = cluster_client
+        client = matched(cluster_client)
         timings["cluster_s"] = time.perf_counter() - t
         t = time.perf_counter()
         warm = _warm_up_workers(client, plan, sink) if warm_up else not sink.should_stop()
@@ -37,10 +42,11 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
             sink.started()
             _dispatch(client, plan, todo, sink, bar, filler)
         timings["compute_s"] = time.perf_counter() - t
+        bar.close()   # the points are done: say so before the next phase
         if needs_estimate(plan, sink.sweep, sink.cube) or \
                 (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink.cube, sink.sweep, timings)
-    bar.close()
+            estimate_into(plan, client, sink.cube, sink.sweep, timings,
+                          display=phases.display(plan, progress))
 
 
 def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
@@ -67,40 +73,64 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
 
 def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
               filler=None) -> None:
-    """Keep one block per worker thread (plus one) in flight, the next submitted as one
-    finishes; once ``sink.should_stop()``, submit no more and collect those in flight (a
-    stop loses no finished work and waits for at most one block per worker)."""
+    """Keep one block per matching worker thread (plus one) in flight, the next submitted
+    as one finishes; once ``sink.should_stop()``, submit no more and collect those in
+    flight (a stop loses no finished work and waits for at most one block per worker).
+
+    Every REFRESH_S the workers are looked at again (``client`` is a
+    :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
+    workers have all gone is submitted again, and a batch cluster's idle jobs end once
+    fewer blocks are left than workers (``client.scaler``)."""
     from distributed import as_completed
 
     queue = list(reversed(todo))
-    inflight: dict = {}
+    inflight: dict = {}        # future -> (block, the workers it may run on)
     done = as_completed(loop=client.loop)
-    window, window_at = 1, -1e9
+    good: dict[str, int] = {}
+    looked = -1e9
 
     def fill() -> None:
-        nonlocal window, window_at
-        if time.monotonic() - window_at > 5.0:   # workers may join or leave
-            window = max(1, sum(client.nthreads().values())) + 1
-            window_at = time.monotonic()
-        while queue and len(inflight) < window:
+        window = sum(good.values()) + 1
+        while queue and good and len(inflight) < window:
             b = queue.pop()
+            allowed = list(good)
             future = client.submit(task.compute_block, plan.scene, plan.block_points(b),
                                    plan.params, plan.numerics.settings, plan.blocks[b],
-                                   pure=False)
-            inflight[future] = b
+                                   pure=False, workers=allowed)
+            inflight[future] = (b, frozenset(allowed))
             done.add(future)
-        while filler is not None and not queue and \
+        while filler is not None and good and not queue and \
                 len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
             pass
 
-    if not sink.should_stop():
-        fill()
-    for future in done:
-        b = inflight.pop(future)
-        sink(b, future.result())
-        bar.update(len(plan.blocks[b]))
-        if not sink.should_stop():
+    while True:
+        if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
+            good, looked = client.check.matching(), time.monotonic()
+            _resubmit_orphans(client, inflight, good, queue)
+            if getattr(client, "scaler", None) is not None:
+                client.scaler.tick(len(queue) + len(inflight))
+        stopping = sink.should_stop()
+        if not stopping:
             fill()
+        if not inflight and (stopping or not queue):
+            break
+        if not done.has_ready():
+            time.sleep(TICK_S)
+            continue
+        finished = [(inflight.pop(f)[0], f.result()) for f in done.next_batch(block=False)
+                     if f in inflight]   # (not: cancelled and submitted again)
+        sink.many(finished)   # journaled as one group
+        bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+
+
+def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
+    """Blocks restricted to workers that have all gone (batch jobs ended) wait for ever
+    in dask: cancel them and put them first in the queue."""
+    for future, (b, allowed) in list(inflight.items()):
+        if not future.done() and not allowed & good.keys():
+            client.cancel(future)
+            del inflight[future]
+            queue.append(b)
 
 
 def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
@@ -123,8 +153,4 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):
     """Progress in points (blocks are small and cost-balanced: sweeps.planning.plan), with tqdm's
     rate and ETA."""
-    from tqdm import tqdm
-
-    return tqdm(total=sum(len(plan.blocks[b]) for b in todo), unit="point",
-                desc=f"{plan.spec.name} [{plan.sweep_id}]", disable=not enabled,
-                mininterval=0.5)
+    return phases.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point", enabled)

@@ -21,6 +21,7 @@ import store
 from engine import status as S
 
 from ..workers.cluster import dask_client
+from . import phases
 from .dispatch import run_blocks, run_blocks_local
 from ..planning.plan import Plan, balanced_blocks
 from ..planning.refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
@@ -111,6 +112,7 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
             todo, level = _advance(plan, sink.cube), level + 1
         timings["compute_s"] = time.perf_counter() - t
         if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-            estimate_into(plan, c, sink.cube, sink.sweep, timings, started=early)
+            estimate_into(plan, c, sink.cube, sink.sweep, timings, started=early,
+                          display=phases.display(plan, progress))
         elif early is not None:
             early.cancel(c)

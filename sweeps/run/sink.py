@@ -10,17 +10,20 @@ import numpy as np
 
 import store
 from engine import status as S
+from store.record import BlockRecord
 
 from .lease_holder import LEASE_LOST
 from ..planning.plan import Plan
+from ..version import results_fingerprint
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running ...
 PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time on it: the
                           # submitter shares the machine with the workers (a 961-point Fig. 14
                           # cube takes 0.35 s to write: every ~12 s, not every 5 s)
 
-log = logging.getLogger("ditherlab")
+JOURNAL_THREADS = 32      # a group of finished blocks is journaled by this many threads
 
+log = logging.getLogger("ditherlab")
 
 
 class BlockSink:
@@ -36,17 +39,30 @@ class BlockSink:
         self.last_publish, self.publish_s = time.monotonic(), 0.0
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
+        self.fingerprint = results_fingerprint()     # what every journaled block must carry
+        self.foreign_blocks = 0                      # blocks refused for another engine
+        self._pool = None                            # journal writers for a group of blocks
         self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
         self._report(force=True)
 
-    def __call__(self, b: int, record) -> None:
-        """Block ``b`` finished (its :class:`store.BlockRecord`): journal, cube, progress."""
-        if record.error:
-            log.warning("block %d failed: %s", b, record.error)
-        self.journal.write(b, record)
-        store.fill(self.cube, record)
-        self.done.add(b)
-        self.blocks_run += 1
+    def __call__(self, b: int, record: BlockRecord) -> None:
+        self.many([(b, record)])
+
+    def many(self, items: list[tuple[int, BlockRecord]]) -> None:
+        """Finished blocks ``(b, record)``, as many as the dispatch found ready: journaled
+        as one group (each file fsynced, the fsyncs in parallel threads: the disk commits
+        them together, 8.5 ms per file one after another against 1.0 ms in a group of 16,
+        measured here; scripts/bench_scale.py), then into the cube, then one progress
+        report and at most one publish."""
+        ours = [(b, r) for b, r in items if self._ours(b, r)]
+        if len(ours) > 1:
+            list(self._writers().map(lambda item: self.journal.write(*item), ours))
+        elif ours:
+            self.journal.write(*ours[0])
+        for b, record in ours:
+            store.fill(self.cube, record)
+            self.done.add(b)
+        self.blocks_run += len(ours)
         since = time.monotonic() - self.last_publish
         if since > max(PUBLISH_EVERY_S, self.publish_s / PUBLISH_SHARE) and \
                 self.stopped != LEASE_LOST:
@@ -55,6 +71,26 @@ class BlockSink:
             self.last_publish = time.monotonic()
             self.publish_s = self.last_publish - t
         self._report()
+
+    def _ours(self, b: int, record: BlockRecord) -> bool:
+        """The block's engine is this sweep's: the last line of defence
+        (sweeps.workers.matching)."""
+        if record.fingerprint != self.fingerprint:
+            self.foreign_blocks += 1
+            log.warning("block %d came back from another engine (results fingerprint %s, "
+                        "this sweep's %s): not journaled; its points stay to compute",
+                        b, record.fingerprint, self.fingerprint)
+            return False
+        if record.error:
+            log.warning("block %d failed: %s", b, record.error)
+        return True
+
+    def _writers(self):
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(JOURNAL_THREADS, thread_name_prefix="journal")
+        return self._pool
 
     def _report(self, force: bool = False, **extra) -> None:
         if force or self.lease.due():

@@ -31,9 +31,11 @@ from store.catalogue_db import FINAL
 from ..estimates import time_history as history
 from ..workers import task
 from ..workers.cluster import EarlyStart
+from . import phases
 from .new_cube import empty_cube
 from .dispatch import run_blocks, run_blocks_local
 from .lease_holder import LEASE_LOST, Lease
+from ..workers.matching import matched
 from .outcome import SubmitResult, abort, attached_result, final_result
 from ..planning.plan import Plan
 from .progress import attach
@@ -68,7 +70,8 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
 
     ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
     ``client`` is a dask client to use instead of starting a cluster (``dashboard``: the
-    address of a started LocalCluster's dashboard, see :func:`sweeps.workers.cluster.dask_client`);
+    address of a started LocalCluster's dashboard, see :func:`sweeps.workers.cluster.dask_client`;
+    ``workers`` a :class:`sweeps.workers.batch.BatchWorkers` for batch jobs);
     ``owner`` the lease owner tag (default this process's ``host:pid``); ``stop`` a
     ``threading.Event`` that, once set, ends the run after its in-flight blocks and
     re-queues the sweep (serve).
@@ -107,9 +110,14 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     # a local cluster starts (and compiles the kernel) while the cube is prepared below;
     # not for a run that only republishes its cube
     local = plan.path == "simulate" and client is None and scheduler is None
+    client = matched(client)   # blocks go only to workers that run this engine
+    if not isinstance(workers, int):   # batch jobs (sweeps.workers.batch): no more than blocks
+        workers = workers.for_blocks(len(todo))
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and (todo or needs_estimate(plan, sweep, cube)) else None
+    if early is not None:
+        phases.say(plan, f"starting a local cluster of {workers} workers", progress)
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
@@ -139,7 +147,10 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
             if early is not None:
                 timings["cluster_s"] = waited
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
+            phases.say(plan, "publishing the cube", progress)
             store.publish(cube, sweep.cube)
+        if early is not None:
+            phases.say(plan, "stopping the local cluster", progress)
     except BaseException as exc:
         abort(plan, sink, lease, exc, serving=stop is not None)
         raise

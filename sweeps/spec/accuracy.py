@@ -99,6 +99,12 @@ _BAND_FRACTIONS = ("stick_fraction", "slip_fraction", "near_slip_fraction", "alp
 LAW_PROMISE_OVERRIDES = {
     law: {o: {"reference": 1e-6} for o in _BAND_FRACTIONS} for law in ("lugre", *STATIC_LAWS)
 }
+# The elasto-plastic slider's mean friction at draft: each stick-slip event's timing moves
+# F_mean, as it moves the run lengths above. On specs/demo-stick-slip.toml (49 points, sine
+# dither up to omega = 2000) draft (DP5 rtol 1e-5) against standard was 3.4e-2 off at most
+# (W = 2, omega = 2000; 9 of 49 points above 1e-2), which the error estimate reported as the
+# demo's first output line (issue 30; scripts/promise_check.py, docs/ACCURACY.md 5.2)
+LAW_PROMISE_OVERRIDES["elastoplastic"] = {"F_mean": {"draft": 5e-2}}
 
 
 def promise(level: str, output: str, friction: str | None = None) -> float:

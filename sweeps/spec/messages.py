@@ -59,7 +59,7 @@ def format_error(err: dict) -> str:
     if kind == "too_short":
         return f"{loc}: needs at least one value, got {show(value)}"
     if kind == "extra_forbidden":
-        return f"{loc}: unknown key (check the spelling; see README 'Spec reference')"
+        return f"{loc}: unknown key (check the spelling; see docs/SPEC.md)"
     if kind == "missing":
         return f"{loc}: missing (a range needs start, stop and num)" if ".grid." in f".{loc}" \
             else f"{loc}: missing"

@@ -11,6 +11,7 @@ from contextlib import contextmanager
 log = logging.getLogger("ditherlab")
 
 NOTICE_AFTER_S = 3.0   # a warm-up longer than this is a first compilation: say so
+LOOPBACK_HTTP = "127.0.0.1:0"   # the scheduler's HTTP server (health checks) when no dashboard
 
 
 class ClusterStartError(RuntimeError):
@@ -19,8 +20,10 @@ class ClusterStartError(RuntimeError):
 
 @contextmanager
 def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str | None = None):
-    """A client on an existing cluster (``scheduler`` address) or on a LocalCluster of
-    ``workers`` single-threaded processes.
+    """A client on an existing cluster (``scheduler`` address), on a LocalCluster of
+    ``workers`` single-threaded processes, or on batch jobs (``workers`` a
+    :class:`sweeps.workers.batch.BatchWorkers`). Its tasks reach only the workers that run this
+    engine (a :class:`sweeps.workers.matching.MatchedClient`).
 
     ``dashboard`` is the address of the LocalCluster's dask dashboard (e.g. ``":8787"``,
     needs bokeh: ``pip install 'ditherlab[dashboard]'``); its link is logged when it
@@ -33,19 +36,29 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
     cube (which fails for an in-memory image: "Semaphore or Lock ... not known")."""
     from distributed import Client, LocalCluster
 
+    from .matching import matched
+
     if scheduler:
         client = Client(scheduler, timeout="20s", set_as_default=False)
         try:
-            yield client
+            yield matched(client)
         finally:
             client.close()
         return
-    http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": ":0"}}
+    if not isinstance(workers, int):   # sweeps.workers.batch.BatchWorkers: workers as batch jobs
+        from .batch import batch_client
+
+        with batch_client(workers, dashboard) as client:
+            yield client
+        return
+    # every socket on loopback (scheduler, its HTTP server, nannies, workers) unless the
+    # user names the dashboard's address
+    http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": LOOPBACK_HTTP}}
     with _sigint_ignored():   # workers are born ignoring Ctrl-C: their submitter stops them
         try:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=dashboard, silence_logs=logging.CRITICAL,
-                                   **http)
+                                   host="127.0.0.1", dashboard_address=dashboard,
+                                   silence_logs=logging.CRITICAL, **http)
         except Exception as exc:  # noqa: BLE001 -- one line for dask's nested traceback
             raise ClusterStartError(
                 f"the local dask workers did not start ({exc}); their own message is above. "
@@ -55,7 +68,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
         if dashboard:
             log.info("dask dashboard: %s", client.dashboard_link)
         client.register_plugin(_ignore_sigint_plugin())   # ... and workers restarted later
-        yield client
+        yield matched(client)
 
 
 class EarlyStart:

@@ -19,6 +19,8 @@ from engine import params as P
 from engine import status as S
 from store.record import BlockRecord
 
+from .block_gate import GATE_ENV, pass_gate
+
 log = logging.getLogger("ditherlab")
 
 BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed block is noted in
@@ -28,7 +30,9 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
                   index: np.ndarray | None = None) -> BlockRecord:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
     ``index``: the points' flat cube indices, carried into the record (default: their
-    positions in ``points``).
+    positions in ``points``). The record's ``fingerprint`` is the results fingerprint of
+    the process that computed it (the submitter journals a block only under its own:
+    sweeps.run.sink).
 
     With ``$DITHERLAB_BLOCK_LOG`` set (inherited by local dask workers), appends one line
     per call to that file: pid and :func:`block_key` (how the tests count block
@@ -36,6 +40,8 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
     """
     from engine.batch import run_block
 
+    if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
+        pass_gate(os.environ[GATE_ENV])
     if os.environ.get(BLOCK_LOG_ENV):
         _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))
     index = np.arange(len(points)) if index is None else index
@@ -43,8 +49,23 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
         res = run_block(scene, points, p, settings)
     except Exception as exc:  # noqa: BLE001 -- one bad block must not end the sweep
         return BlockRecord.failed(index, scene.outputs, f"{type(exc).__name__}: {exc}",
-                                  S.FAILED)
-    return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs)
+                                  S.FAILED, fingerprint=_fingerprint())
+    return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs,
+                       fingerprint=_fingerprint())
+
+
+def identity() -> dict:
+    """What a worker runs: its results fingerprint and ditherlab version, computed from
+    the modules this process imports (run on each worker as it joins: sweeps.workers.matching)."""
+    from ..version import __version__
+
+    return {"fingerprint": _fingerprint(), "version": __version__}
+
+
+def _fingerprint() -> str:
+    from ..version import results_fingerprint
+
+    return results_fingerprint()
 
 
 def block_key(scene, points: np.ndarray, settings) -> str:

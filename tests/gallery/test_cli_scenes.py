@@ -25,6 +25,17 @@ def test_scenes_lists_every_scene_with_its_points(capsys):
         assert line.split()[1:3] == [str(scene.n_points("small")), str(scene.n_points("full"))]
 
 
+def test_scenes_lists_every_figure_the_gallery_draws_with_its_recipe(capsys):
+    """A user finds Fig. 12 (a trajectory figure, no sweep) from the command line."""
+    from sweeps.gallery.build import FIGURES, RECIPES
+
+    _, out, _ = _run(capsys, "scenes")
+    assert set(RECIPES) == set(FIGURES)
+    for key, recipe in RECIPES.items():
+        assert f"{key:<15}{recipe}" in out.splitlines()
+    assert "W = 0, 1.5, 2.5 at omega 100, vd 0.1 and 0.01" in RECIPES["fig12"]
+
+
 @pytest.mark.parametrize("argv, message", [
     (("submit", "--scene", "nope"), "unknown scene 'nope'; known scenes: fig01"),
     (("plan", "--scene", "fig99"), "unknown scene 'fig99'"),
@@ -55,9 +66,10 @@ def test_a_full_scene_is_its_spec_file(name):
     with open(SPECS / scene.spec_file, "rb") as fh:
         data = tomllib.load(fh)
     full = scene.spec("full")
-    assert {k: v for k, v in full.items() if k not in ("name", "params")} == \
-        {k: v for k, v in data.items() if k not in ("name", "params")}
+    assert {k: v for k, v in full.items() if k not in ("name", "params", "refine")} == \
+        {k: v for k, v in data.items() if k not in ("name", "params", "refine")}
     assert full.get("params", {}) == {**data.get("params", {}), **scene.params}
+    assert full.get("refine", False) == (scene.refine or data.get("refine", False))
 
 
 @pytest.mark.parametrize("name", sorted(REGISTRY))

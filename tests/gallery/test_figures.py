@@ -11,9 +11,12 @@ import pytest
 from engine import params as P
 from sweeps.gallery.build import FIGURES, build
 from sweeps.gallery.context import Context
-from sweeps.gallery.verdicts import FAILS, HOLDS
+from sweeps.gallery.verdicts import HOLDS, PARTLY
 
 SLOW = {"fig14", "beyond_scaling"}
+# the module's fixture draws 15 figures (about 2 min of CPU): on a 2-core machine shared by
+# seven jobs (load 30) it took over 15 min, past the suite's 900 s hang guard
+pytestmark = pytest.mark.timeout(2400)
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
@@ -36,6 +39,27 @@ def test_every_figure_renders_and_the_page_is_written(gallery):
     for r in results.values():
         assert f"src='{r.png.name}'" in html and f"]({r.png.name})" in md
         assert r.verdict in md
+
+
+def test_small_verdicts(gallery):
+    """The paper model's verdicts (per reading too) at the small size: what the wrong models
+    of tests/gallery/test_wrong_models.py must change."""
+    from tests.gallery.test_wrong_models import CORRECT
+
+    results = gallery[0]
+    assert {k: (results[k].verdict, results[k].readings) for k in CORRECT} == CORRECT
+
+
+def test_the_page_has_conventions_readings_and_the_loose_section(gallery):
+    results, ctx = gallery
+    md, html = (ctx.outdir / "gallery.md").read_text(), (ctx.outdir / "index.html").read_text()
+    assert "## Where the paper is loose or wrong" in md and "id='loose'" in html
+    for r in results.values():
+        for x in r.loose:
+            assert x in md
+    assert "convention: 'strong attenuation'" in md and "*vd = 0.01*" in md
+    assert "align-items:flex-start" in html            # no stretched images
+    assert "<div class='fig wide' id='fig01'>" in html  # 1188 x 324 px: above its text
 
 
 def _contact_asymptote(n_max=5, n=4096):
@@ -67,23 +91,35 @@ def test_fig02_harmonics_at_high_frequency_are_the_asymptote_s(gallery):
     r = gallery[0]["fig02"]
     _, amps = _contact_asymptote()
     for n in range(1, 6):
-        assert r.numbers[f"F{n}_high"] == pytest.approx(amps[n - 1], abs=5e-4), n
-    # the asymptote's third harmonic exceeds the low-frequency one: the claim fails
-    assert amps[2] > 2 * r.numbers["F3_low"]
-    assert r.verdict == FAILS
+        assert r.numbers[f"F{n}_high_dd2"] == pytest.approx(amps[n - 1], abs=5e-4), n
+    # the asymptote's third harmonic exceeds the low-frequency one: the total fails, ...
+    assert amps[2] > 2 * r.numbers["F3_low_dd2"]
+    # ... while the bristle force sigma0 z loses every harmonic (its asymptote is the
+    # constant Y: no harmonics at all)
+    for dd in ("dd2", "dd1"):
+        assert max(r.numbers[f"ratio_sigma0_F{n}_{dd}"] for n in range(2, 6)) < 1e-3
+    assert r.verdict == PARTLY
+    assert set(r.readings.values()) == {PARTLY}
 
 
 def test_fig05_slopes(gallery):
     r = gallery[0]["fig05"]
-    assert r.numbers["slope_dev"] < 0.05                 # Eq. 5.13 against the curve
-    assert r.numbers["static_slope"] == pytest.approx(0.004, abs=1e-6)   # Eq. 5.14: sigma2
-    assert r.numbers["n_secondary_vd0.1"] >= 1           # Fig. 5(a): a secondary zone
+    for W in (0.25, 0.5, 1.0):
+        assert r.numbers[f"eq513_dev_W{W}"] < 0.05       # Eq. 5.13 against the curve
+        # Eq. 5.14 at v = 0: slope sigma2 + g'(W), g'(W) = -(fs - fc) 2 W / vs^2 e^-(W/vs)^2
+        g1 = -0.5 * 2 * W / 0.01 * np.exp(-(W / 0.1) ** 2)
+        assert r.numbers[f"static_slope_W{W}"] == pytest.approx(0.004 + g1, abs=1e-6)
+    assert r.numbers["n_secondary_vd0.1_W0.5"] >= 1      # Fig. 5(a): a secondary zone
+    assert r.numbers["secondary_ratio"] < 1 / 3          # much smaller at vd = 0.01 ...
+    assert r.numbers["secondary_width_vd0.01_W0.5"] > 0  # ... but not gone
+    assert r.verdict == PARTLY                           # the static slope at W = 0.25
 
 
 def test_fig07_slopes_are_eq_5_21(gallery):
     r = gallery[0]["fig07"]
-    for a in (0.5, 0.75):
-        assert r.numbers[f"slope_{a}"] == pytest.approx(np.pi / (2 * a) + 0.004, rel=1e-6)
+    for a in (0.5, 0.75):   # the full model (Stribeck, damping) near Eq. 5.21's slope
+        assert r.numbers[f"slope_{a}"] == pytest.approx(np.pi / (2 * a) + 0.004, rel=0.01)
+    assert r.numbers["eq520_gap"] < 1e-8                 # Eq. 5.20 = scipy's average
     assert r.verdict == HOLDS
 
 
@@ -95,8 +131,14 @@ def test_simulated_friction_follows_the_averaged_curve(gallery, key):
 
 
 def test_fig09_zones(gallery):
+    from sweeps.gallery.reference import averaged_max_eig
+
     r = gallery[0]["fig09"]
-    assert r.numbers["PU_0.1"] > 0 and r.numbers["SU_0.1"] > 0      # Fig. 9(a): two zones
+    limit = r.numbers["v_ref_limit"]
+    # independent: the undithered system's growth rate changes sign within 1e-5 of it
+    assert averaged_max_eig(limit - 1e-5, 0.0, 0.1) > 0 > averaged_max_eig(limit + 2e-5, 0.0, 0.1)
+    assert r.numbers["SU_0.1"] > 0 and r.numbers["SU_0.1_beyond"] > 0  # Fig. 9(a): the minor zone
+    assert r.numbers["ref_points"] > 50 and r.numbers["ref_disagree"] == 0
     assert r.numbers["stable_share_above_vref"] == 1.0              # Sec. 6 text, v_ref ~ vs
 
 
@@ -136,10 +178,13 @@ def test_fig10_quenching(gallery):
 def test_fig12_undithered_stick_share_is_the_reference(gallery):
     r = gallery[0]["fig12"]
     # DESIGN.md / docs/MODEL.md Sec. 7 (scripts/reference_phases.py): stick 0.5269104
-    assert r.numbers["stick_W0.0"] == pytest.approx(0.5269104, abs=1e-3)
-    assert r.numbers["max_stick_W0.0"] > 0.5                       # Fig. 12(a): long stick
-    assert max(r.numbers["max_stick_W1.5"], r.numbers["max_stick_W2.5"]) < 0.5   # 12(c), (e)
-    assert r.numbers["slip_W2.5"] > r.numbers["slip_W1.5"]         # Figs. 12(d), (f)
+    assert r.numbers["stick_W0.0_vd0.1"] == pytest.approx(0.5269104, abs=1e-3)
+    for vd in (0.1, 0.01):
+        n = {k[: -len(f"_vd{vd}")]: x for k, x in r.numbers.items() if k.endswith(f"_vd{vd}")}
+        assert n["max_stick_W0.0"] > 0.5                       # Fig. 12(a): long stick
+        assert max(n["max_stick_W1.5"], n["max_stick_W2.5"]) < 0.5   # 12(c), (e)
+        assert n["slip_W2.5"] > n["slip_W1.5"]                 # Figs. 12(d), (f)
+    assert r.readings == {"vd = 0.1": PARTLY, "vd = 0.01": HOLDS}
 
 
 def test_fig11_fig13_sticking(gallery):
@@ -153,8 +198,8 @@ def test_fig11_fig13_sticking(gallery):
 def test_fig15_to_17(gallery):
     r15, r16 = gallery[0]["fig15"], gallery[0]["fig16"]
     for v in (0.1, 0.5, 1.0):
-        assert r15.numbers[f"max_stick_v{v}"] > 0.5 > r16.numbers[f"max_stick_v{v}"]  # Fig. 16
-    F = [r16.numbers[f"F_mean_v{v}"] for v in (0.1, 0.5, 1.0)]
+        assert r15.numbers[f"max_stick_v{v}"] > 0.5 > r16.numbers[f"max_stick_v{v}_W1.5"]
+    F = [r16.numbers[f"F_mean_v{v}_W1.5"] for v in (0.1, 0.5, 1.0)]
     assert F == sorted(F)                                  # Figs. 16(b), (d), (f)
 
 

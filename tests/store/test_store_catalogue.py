@@ -128,34 +128,52 @@ def test_cube_without_row_is_adopted(tmp_path):
     assert store.Catalogue(tmp_path).find("orphan")["updated"] == "2023-11-14T22:13:20.000+00:00"
 
 
+# Each writer updates its own row and a shared one in ROUNDS rounds; between rounds it waits
+# on stdin until the test has heard both finish the round (a barrier). So both writers are
+# certainly inside their update loops at once (each has begun before the first barrier
+# opens and ends after the last), however the machine schedules them, and at each barrier
+# each must read the other's finished rounds from the catalogue.
 WORKER = """
 import sys, time
 sys.path.insert(0, {root!r})
 import store
 cat = store.Catalogue(sys.argv[1], timeout_s=60)
-me = sys.argv[2]
+me, other = sys.argv[2], sys.argv[3]
 cat.register(me, me, "{{}}", {n}, {n}, me)
 print("ready", flush=True)
-sys.stdin.readline()  # start together
-t0 = time.time()
-for k in range({n}):
-    cat.update(me, state="running", done_points=k + 1)
-    cat.update("shared", message=f"{{me}} {{k}}")
-    if k % 50 == 0:
-        assert any(r["sweep_id"] == me for r in cat.list())
+sys.stdin.readline()  # barrier: both registered
+t0 = time.monotonic()
+chunk = {n} // {rounds}
+for r in range({rounds}):
+    if r:
+        sys.stdin.readline()  # barrier: both finished round r - 1
+        seen = cat.get(other)["done_points"]
+        assert seen >= r * chunk, f"{{me}} saw {{other}} at {{seen}} < {{r * chunk}}"
+    for k in range(r * chunk, (r + 1) * chunk):
+        cat.update(me, state="running", done_points=k + 1)
+        cat.update("shared", message=f"{{me}} {{k}}")
+        if k % 50 == 0:
+            assert any(row["sweep_id"] == me for row in cat.list())
+    print("round", r, flush=True)
 cat.update(me, state="done")
-print(t0, time.time(), flush=True)
+print(t0, time.monotonic(), flush=True)
 """
 
 
+def _release(procs) -> None:
+    for p in procs:
+        p.stdin.write("go\n")
+        p.stdin.flush()
+
+
 def test_two_processes_update_concurrently(tmp_path):
-    n = 400
+    n, rounds = 400, 4
     cat = store.Catalogue(tmp_path)
     cat.register("shared", "shared", "{}", 1, 1, "x")
-    code = WORKER.format(root=str(ROOT), n=n)
+    code = WORKER.format(root=str(ROOT), n=n, rounds=rounds)
     procs = [
         subprocess.Popen(
-            [sys.executable, "-c", code, str(tmp_path), f"writer{i}"],
+            [sys.executable, "-c", code, str(tmp_path), f"writer{i}", f"writer{1 - i}"],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
@@ -163,16 +181,21 @@ def test_two_processes_update_concurrently(tmp_path):
         )
         for i in range(2)
     ]
-    assert [p.stdout.readline().strip() for p in procs] == ["ready", "ready"]
-    for p in procs:
-        p.stdin.write("go\n")
-        p.stdin.flush()
-    outs = [p.communicate(timeout=120) for p in procs]
-    assert [p.returncode for p in procs] == [0, 0], [err for _, err in outs]
-    (start0, end0), (start1, end1) = [map(float, out.split()) for out, _ in outs]
-    print(
-        f"writer windows: {end0 - start0:.3f} s, {end1 - start1:.3f} s, overlap {min(end0, end1) - max(start0, start1):.3f} s"
-    )
+    try:
+        assert [p.stdout.readline().strip() for p in procs] == ["ready", "ready"]
+        for r in range(rounds):
+            _release(procs)
+            assert [p.stdout.readline().strip() for p in procs] == [f"round {r}"] * 2, \
+                [p.stderr.read() for p in procs if p.poll() is not None]
+        windows = [p.stdout.readline() for p in procs]   # (not communicate: readline buffers)
+        codes = [p.wait(timeout=120) for p in procs]
+        assert codes == [0, 0], [p.stderr.read() for p in procs]
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+    (start0, end0), (start1, end1) = [map(float, line.split()) for line in windows]
+    # certain by the barriers: a failure here means the barrier protocol broke
     assert max(start0, start1) < min(end0, end1), "the two writers did not overlap in time"
     rows = {r["sweep_id"]: r for r in cat.list()}
     for i in range(2):
@@ -216,7 +239,6 @@ def test_a_killed_unreaped_submitter_reads_stalled(tmp_path):
     import signal
     import subprocess
     import sys
-    import time
 
     from store.catalogue import Catalogue
     from store.lease import STALLED, owner_tag
@@ -229,7 +251,7 @@ def test_a_killed_unreaped_submitter_reads_stalled(tmp_path):
         row = cat.update("z", state="running", owner=f"{host}:{child.pid}")
         assert cat.live_state(row) == "running"
         child.send_signal(signal.SIGKILL)
-        time.sleep(0.5)                       # dead, not reaped: a zombie
+        os.waitid(os.P_PID, child.pid, os.WEXITED | os.WNOWAIT)   # dead, not reaped: a zombie
         assert cat.live_state(row) == STALLED
     finally:
         child.kill()

@@ -1,4 +1,5 @@
 """Helpers for end-to-end tests through the real command line."""
+import os
 import signal
 import subprocess
 import sys
@@ -62,3 +63,41 @@ def spec_file(tmp_path):
         path.write_text(text)
         return path
     return write
+
+
+class BlockGate:
+    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate): a FIFO every block
+    computation takes a byte from before it starts. ``let(n)`` lets n more blocks start;
+    ``open()`` lets every block start from now on. Held shut from creation."""
+
+    def __init__(self, path: Path):
+        os.mkfifo(path)
+        self.path = path
+        self._fd: int | None = os.open(path, os.O_RDWR)   # a writer held: readers wait
+
+    def let(self, n: int) -> None:
+        os.write(self._fd, b"x" * n)
+
+    def open(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)   # no writer left: every read, now and later, passes
+            self._fd = None
+
+
+@pytest.fixture
+def env(tmp_path):
+    """The environment of the CLI processes a test starts: blocks counted in
+    ``blocks.log`` (sweeps.workers.task, ``$DITHERLAB_BLOCK_LOG``)."""
+    return {**os.environ, "MPLBACKEND": "Agg", "DITHERLAB_BLOCK_LOG": str(tmp_path / "blocks.log")}
+
+
+@pytest.fixture
+def gate(tmp_path, env):
+    """A shut :class:`BlockGate` in ``env`` (the test's ``env`` fixture): the processes
+    started with ``env`` hold every block until the test lets it through."""
+    from sweeps.workers.block_gate import GATE_ENV
+
+    held = BlockGate(tmp_path / "block-gate")
+    env[GATE_ENV] = str(held.path)
+    yield held
+    held.open()

@@ -33,6 +33,15 @@ def explicit(acc: dict, base=SEC7, **changes) -> dict:
     return {**base, **changes, "accuracy": acc}
 
 
+def accepted(data):
+    """The numerics ``data`` runs with, parsed with SpecWarning as an error: an accepted
+    spec is accepted silently and runs with what it asked for (a check that refused it,
+    warned, or changed its step on the way would fail here)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SpecWarning)
+        return make_plan(parse_spec(data)).numerics
+
+
 def test_rk4_stability_bounds_come_from_the_tableau():
     assert stability_region.reach("rk4", math.pi) == pytest.approx(2.7853, abs=1e-4)
     assert stability_region.reach("rk4", math.pi / 2) == pytest.approx(2 * math.sqrt(2), abs=1e-6)
@@ -50,7 +59,8 @@ def test_unstable_explicit_step_of_issue_10_is_refused():
 
 
 def test_explicit_step_under_the_bound_is_allowed():
-    parse_spec(explicit({"integrator": "rk4", "steps_per_period": 3}))   # h omega = 2.09
+    n = accepted(explicit({"integrator": "rk4", "steps_per_period": 3}))   # h omega = 2.09
+    assert (n.integrator, n.label, n.settings.steps_per_period) == ("rk4", "explicit", 3)
 
 
 def _no_dither_step(h_lambda: float) -> float:
@@ -65,7 +75,8 @@ def test_bristle_relaxation_bound_on_the_real_axis(h_lambda, ok):
     data = explicit({"integrator": "rk4", "step": _no_dither_step(h_lambda)},
                     dither="none", grid={"W": [0.0], "v_ref": [0.1]})
     if ok:
-        parse_spec(data)
+        n = accepted(data)
+        assert (n.integrator, n.settings.h) == ("rk4", _no_dither_step(h_lambda))
         return
     (msg,) = refused(data)
     assert msg.startswith("accuracy.step: rk4 unstable"), msg
@@ -107,10 +118,17 @@ def test_steps_per_period_without_dither_refused():
 
 
 def test_explicit_defaults_still_accepted():
-    parse_spec(explicit({"integrator": "rk4", "steps_per_period": 8, "atol_units": "absolute"}))
-    parse_spec(explicit({"integrator": "dopri5", "rtol": 1e-7, "atol": 1e-10,
-                         "atol_units": "natural"}))
-    parse_spec(explicit({}))
+    """Options equal to the defaults are not "ignored options": accepted, and used."""
+    n = accepted(explicit({"integrator": "rk4", "steps_per_period": 8,
+                           "atol_units": "absolute"}))
+    assert (n.integrator, n.settings.steps_per_period, n.settings.atol_units) == (
+        "rk4", 8, "absolute")
+    n = accepted(explicit({"integrator": "dopri5", "rtol": 1e-7, "atol": 1e-10,
+                           "atol_units": "natural"}))
+    assert (n.integrator, n.settings.rtol, n.settings.atol, n.settings.atol_units) == (
+        "dopri5", 1e-7, 1e-10, "natural")
+    assert (accepted(explicit({})).integrator, accepted(explicit({})).label) == (
+        "dopri5", "explicit")
 
 
 # a scene per dither where the levels may pick rk4 (rk4_fits: h sigma0 u_max / fc <= 0.5)
@@ -135,7 +153,10 @@ def test_level_defaults_unaffected(dither, level):
     assert make_plan(s).numerics.integrator == "rk4"
     step = ({"step": FIXED_H[level]} if dither == "none"
             else {"steps_per_period": FIXED_STEPS[level]})
-    parse_spec({**data, "accuracy": {"integrator": "rk4", **step}})
+    n = accepted({**data, "accuracy": {"integrator": "rk4", **step}})
+    same = ("h",) if dither == "none" else ("steps_per_period",)
+    assert [getattr(n.settings, k) for k in same] == \
+        [getattr(make_plan(s).numerics.settings, k) for k in same]
 
 
 def test_levels_never_checked_for_stability():
@@ -183,7 +204,16 @@ def test_no_budget_check_for_the_analysis_paths():
     """1e12 dither periods would exhaust any time integration; harmonic balance solves one
     period, and the averaged theory has no omega at all (omega -> infinity: a grid.omega
     is refused there, docs/MODEL.md §1)."""
-    parse_spec({"name": "hbm", "method": "hbm", "system": "contact", "friction": "lugre",
-                "dither": "sine-velocity", "grid": {"W": [1e-3], "omega": [1e12]}})
-    parse_spec({"name": "avg", "method": "averaged", "friction": "lugre",
-                "grid": {"W": [0.5, 1e6]}})
+    hbm = {"name": "hbm", "method": "hbm", "system": "contact", "friction": "lugre",
+           "dither": "sine-velocity", "grid": {"W": [1e-3], "omega": [1e12]}}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SpecWarning)
+        plan = make_plan(parse_spec(hbm))
+        assert (plan.path, list(plan.coords["omega"])) == ("hbm", [1e12])
+        plan = make_plan(parse_spec({"name": "avg", "method": "averaged", "friction": "lugre",
+                                     "grid": {"W": [0.5, 1e6]}}))
+        assert (plan.path, list(plan.coords["W"])) == ("averaged", [0.5, 1e6])
+    # the same omega on the simulate path is refused: the check is there, and skipped here
+    (msg,) = refused({**hbm, "method": "simulate", "system": "slider",
+                      "time": {"t_end": 100.0, "t_transient": 20.0}})
+    assert msg.startswith("grid.omega: at omega = 1e+12 a point has"), msg

@@ -134,7 +134,10 @@ def test_refined_zone_map_equals_the_full_grid(tmp_path):
     assert "provenance" in store.table(ref).columns
 
 
-def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path):
+def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path, env, gate):
+    """Killed (SIGKILL) once a block of its first level is journaled, with three tasks let
+    through the gate (blocks, or the error sample's re-runs that fill idle workers) and the
+    rest held: certainly mid-run. Resumed, it gives the cube of a run never killed."""
     spec = {**ZONES, "refine": True, "block_size": 1,
             "time": {"t_end": 60.0, "t_transient": 5.0}}
     path = tmp_path / "zones.json"
@@ -143,14 +146,17 @@ def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path):
     crashed, clean = tmp_path / "crashed", tmp_path / "clean"
     journal = crashed / sid / "journal"
     proc = subprocess.Popen([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
                             start_new_session=True)
+    gate.let(3)   # as many tasks as are in flight (2 workers + 1): a block among them
     t0 = time.monotonic()
-    while (len(list(journal.glob("*.npz"))) if journal.exists() else 0) < 4:
+    while (len(list(journal.glob("*.npz"))) if journal.exists() else 0) < 1:
         assert proc.poll() is None and time.monotonic() - t0 < 300, "no blocks journaled"
         time.sleep(0.02)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
+    gate.open()
+    assert 1 <= len(list(journal.glob("*.npz"))) <= 3
     resumed = subprocess.run([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
                              capture_output=True, text=True, timeout=600)
     assert resumed.returncode == 0 and "done" in resumed.stdout, resumed.stderr

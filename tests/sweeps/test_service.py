@@ -5,11 +5,15 @@ resumed, two submitters of one spec compute every block exactly once, and ``part
 points failed) is told apart from ``failed`` (the run crashed).
 
 Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.workers.task.compute_block
-appends one line per computed block, in whichever process computes it)."""
+appends one line per computed block, in whichever process computes it) and held back with
+``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate; the ``gate`` fixture): a test stops a
+sweep, or starts a second submitter, while blocks are certainly still to run, and lets them
+go after it has seen the stop or the attach happen (no timing luck)."""
 import collections
 import os
 import signal
 import subprocess
+import threading
 import time
 
 import numpy as np
@@ -25,8 +29,9 @@ from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
-# 16 one-point blocks of ~0.3-2 s each: time to act on a running sweep between blocks
-SLOW_SPEC = RESUME_SPEC.replace("t_end = 300.0", "t_end = 900.0").replace(
+# 16 one-point blocks; a test acts on the running sweep while it holds them at the gate (it
+# needed blocks of 0.3-2 s, t_end = 900, to have time to act between them, and hoped)
+SLOW_SPEC = RESUME_SPEC.replace(
     'name = "e2e-sim"', 'name = "e2e-slow"').replace(
     "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]", "W = [0.0, 0.2, 0.4, 0.6]")
 FAST_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1")
@@ -89,11 +94,6 @@ class Serve:
         return self.log.read_text()
 
 
-@pytest.fixture
-def env(tmp_path):
-    return {**os.environ, "MPLBACKEND": "Agg", "DITHERLAB_BLOCK_LOG": str(tmp_path / "blocks.log")}
-
-
 def detach(path, root, env) -> str:
     """``submit --detach``; returns the sweep id it printed (the id is taken from the
     command, not recomputed here: it hashes the engine sources, which may change)."""
@@ -150,7 +150,7 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
     assert "already complete" in again.stdout
 
 
-def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, env):
+def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, env, gate):
     root = tmp_path / "store"
     path = spec_file(SLOW_SPEC)
     spec = load_spec(path)
@@ -163,9 +163,16 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
     assert _row(root, sid)["state"] == "queued"
     serve = Serve(root, tmp_path, env)
     try:
+        gate.let(1)
         _wait_for(lambda: _journaled(root, sid) >= 1, 300, "a journaled block", poll=0.05)
-        out = run_cli("cancel", sid, "--wait", store_root=root, env=env).stdout
-        assert out.startswith(f"{sid}: cancelled"), out
+        # the other blocks are held: the cancel is certainly asked for mid-run
+        cancel = subprocess.Popen([str(BIN), "cancel", sid, "--wait", "--store", str(root)],
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                  env=env)
+        _wait_for(lambda: store.Catalogue(root).cancel_requested(sid), 120, "the cancel request")
+        gate.open()   # the runner sees the request as its blocks in flight finish
+        out, err = cancel.communicate(timeout=600)
+        assert cancel.returncode == 0 and out.startswith(f"{sid}: cancelled"), (out, err)
         row = _row(root, sid)
         assert row["state"] == "cancelled" and row["owner"] == "" and "cancelled after" in \
             row["message"], row
@@ -188,16 +195,21 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
     assert _row(root, sid)["done_blocks"] == N_SLOW
 
 
-def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_file, env):
+def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_file, env,
+                                                              gate):
     root = tmp_path / "store"
     path = spec_file(SLOW_SPEC)
     spec = load_spec(path)
     sid = detach(path, root, env)
     serve = Serve(root, tmp_path, env)
     try:
+        gate.let(3)
         _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
         t0 = time.monotonic()
-        assert serve.stop(signal.SIGTERM) == 0, serve.text()
+        os.kill(serve.proc.pid, signal.SIGTERM)   # the other blocks are held meanwhile
+        _wait_for(lambda: "serve: SIGTERM: stopping" in serve.text(), 120, "serve's stop")
+        gate.open()
+        assert serve.proc.wait(timeout=120) == 0, serve.text()
         print(f"serve exited {time.monotonic() - t0:.1f} s after SIGTERM")
     finally:
         serve.kill()
@@ -222,17 +234,19 @@ def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_fil
 
 
 def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
-        tmp_path, spec_file, env):
+        tmp_path, spec_file, env, gate):
     root = tmp_path / "store"
     path = spec_file(SLOW_SPEC)
     spec = load_spec(path)
     sid = detach(path, root, env)
     serve = Serve(root, tmp_path, env)
     try:
+        gate.let(3)
         _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
     finally:
-        serve.kill()   # SIGKILL to serve and its cluster
+        serve.kill()   # SIGKILL to serve and its cluster (the other blocks held)
     k = _journaled(root, sid)
+    assert k == 3
     before = _computed(tmp_path / "blocks.log")   # includes the blocks lost in flight
     listing = run_cli("status", store_root=root, env=env).stdout
     assert "stalled" in listing and "is gone" in listing, listing
@@ -242,11 +256,7 @@ def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
         assert set(np.unique(ds["status"].values)) <= {0, 1}
 
     # two submitters race to resume it: one takes the lease over, the other attaches
-    procs = [subprocess.Popen([str(BIN), "submit", str(path), "--store", str(root)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-             for _ in range(2)]
-    outs = [p.communicate(timeout=600) for p in procs]
-    assert [p.returncode for p in procs] == [0, 0], outs
+    outs = _two_submitters(path, root, env, gate)
     ran = sorted(out for out, _ in outs)
     assert any(f"ran {N_SLOW - k} blocks" in o for o in ran), ran
     assert any("attached to the run in" in o for o in ran), ran
@@ -265,30 +275,64 @@ def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
     assert (row["state"], row["done_blocks"], row["owner"]) == ("done", N_SLOW, "")
 
 
-def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env):
+def _two_submitters(path, root, env, gate) -> list[tuple[str, str]]:
+    """``(stdout, stderr)`` of two ``submit`` of one spec started at once. Every block is
+    held (``gate``) until one of them says it attached to the other's run: the race
+    certainly has a runner and an attacher, however the machine schedules the two."""
+    procs = [subprocess.Popen([str(BIN), "submit", str(path), "--store", str(root)],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+             for _ in range(2)]
+    errs: list[list[str]] = [[], []]
+    attached = threading.Event()
+
+    def read(i: int) -> None:
+        for line in procs[i].stderr:
+            errs[i].append(line)
+            if ": attaching (" in line:
+                attached.set()
+
+    readers = [threading.Thread(target=read, args=(i,), daemon=True) for i in range(2)]
+    for reader in readers:
+        reader.start()
+    try:
+        if not attached.wait(600):
+            raise AssertionError(f"no submitter attached in 600 s: {errs}")
+        gate.open()
+        outs = [p.stdout.read() for p in procs]
+        codes = [p.wait(timeout=600) for p in procs]
+        for reader in readers:
+            reader.join(timeout=60)
+    finally:
+        gate.open()
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+    outs = [(out, "".join(err)) for out, err in zip(outs, errs)]
+    assert codes == [0, 0], outs
+    return outs
+
+
+def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env, gate):
     path = spec_file(RESUME_SPEC)
     spec = load_spec(path)
     shared, clean = tmp_path / "shared", tmp_path / "clean"
     t0 = time.monotonic()
-    procs = [subprocess.Popen([str(BIN), "submit", str(path), "--store", str(shared)],
-                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-             for _ in range(2)]
-    outs = [p.communicate(timeout=600) for p in procs]
+    outs = _two_submitters(path, shared, env, gate)
     print(f"two submitters: {time.monotonic() - t0:.1f} s; " +
           " | ".join((out.splitlines() or [f"no output; stderr: {err}"])[0] for out, err in outs))
-    assert [p.returncode for p in procs] == [0, 0], outs
     assert sorted("attached to the run in" in out for out, _ in outs) == [False, True], outs
     counts = _computed(tmp_path / "blocks.log")
     keys = _block_keys(spec)
     print(f"block computations: {sum(counts[k] for k in keys)} for {len(keys)} blocks")
     assert [counts[key] for key in keys] == [1] * len(keys), counts
-    clean_env = {k: v for k, v in env.items() if k != "DITHERLAB_BLOCK_LOG"}
+    clean_env = {k: v for k, v in env.items()
+                 if k not in ("DITHERLAB_BLOCK_LOG", "DITHERLAB_BLOCK_GATE")}
     run_cli("submit", str(path), "--quiet", store_root=clean, env=clean_env)
     (cube,) = shared.glob("*/cube.nc")
     assert_same_results(results(cube), results(clean / cube.parent.name / "cube.nc"))
 
 
-def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, env):
+def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, env, gate):
     root = tmp_path / "store"
     path = spec_file(SLOW_SPEC)
     sid = load_spec(path).sweep_id
@@ -296,10 +340,12 @@ def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, 
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True, preexec_fn=as_a_terminal_job)
     try:
+        gate.let(2)
         _wait_for(lambda: _journaled(root, sid) >= 2, 300, "two journaled blocks", poll=0.05)
         os.killpg(proc.pid, signal.SIGINT)   # Ctrl-C reaches the whole process group
-        proc.communicate(timeout=120)
+        proc.communicate(timeout=120)        # (the other blocks are held meanwhile)
     finally:
+        gate.open()
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()

@@ -3,20 +3,58 @@ to hide ditherlab's ``store`` package under the README's editable install (setup
 finder comes after the script's folder on the path), and the run died in an
 AttributeError deep inside (found running ``python -m sweeps.cli submit ... --store
 store`` twice in one folder). Now ``import sweeps`` says what hides what, in one line;
-where the real package comes first on the path (a plain ``pip install .``) it just works."""
+where the real package comes first on the path (a plain ``pip install .``) it just works.
+
+Both cases are made, not found: the plain one by putting the checkout first on the path,
+the editable one from the install this suite runs under (``scripts/test``: ``pip install
+-e``), which its metadata states (PEP 610 ``direct_url.json``)."""
+import json
+import os
 import subprocess
 import sys
+import sysconfig
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+SCRIPT = "import sweeps, store\nprint('found', store.SweepDir.__name__)\n"
 
 
-def test_a_store_folder_beside_the_script_is_named_or_harmless(tmp_path):
+def _editable_install() -> bool:
+    """Whether the environment's site-packages holds ditherlab as an editable install (not
+    the checkout's own ``ditherlab.egg-info``, which the current folder would find)."""
+    site = sysconfig.get_paths()["purelib"]
+    for dist in metadata.distributions(name="ditherlab", path=[site]):
+        text = dist.read_text("direct_url.json")
+        return bool(text and json.loads(text).get("dir_info", {}).get("editable"))
+    return False
+
+
+def _run_beside_a_store_folder(tmp_path, pythonpath: str | None):
     (tmp_path / "store").mkdir()
     script = tmp_path / "user_script.py"
-    script.write_text("import sweeps, store\nprint('found', store.SweepDir.__name__)\n")
-    out = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
-                         text=True, timeout=120)
-    if out.returncode == 0:
-        assert "found SweepDir" in out.stdout
-    else:
-        last = out.stderr.strip().splitlines()[-1]
-        assert last.startswith("ImportError: the folder") and "hides ditherlab's 'store'" \
-            in last, out.stderr[-2000:]
+    script.write_text(SCRIPT)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    if pythonpath is not None:
+        env["PYTHONPATH"] = pythonpath
+    return subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
+                          text=True, timeout=120, env=env)
+
+
+def test_a_store_folder_beside_the_script_is_named_under_an_editable_install(tmp_path):
+    if not _editable_install():   # the suite's own install (scripts/test) is editable
+        pytest.fail("ditherlab is not installed editable here; run the suite with "
+                    "scripts/test (pip install -e)")
+    out = _run_beside_a_store_folder(tmp_path, pythonpath=None)
+    assert out.returncode == 1, (out.stdout, out.stderr[-2000:])
+    last = out.stderr.strip().splitlines()[-1]
+    assert last == (f"ImportError: the folder {tmp_path / 'store'} hides ditherlab's 'store' "
+                    "package (an editable install looks in the script's folder first): "
+                    "rename that folder or run from another folder"), out.stderr[-2000:]
+
+
+def test_a_store_folder_beside_the_script_is_harmless_when_the_package_comes_first(tmp_path):
+    out = _run_beside_a_store_folder(tmp_path, pythonpath=str(ROOT))
+    assert (out.returncode, out.stdout) == (0, "found SweepDir\n"), out.stderr[-2000:]

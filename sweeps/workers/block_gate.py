@@ -1,0 +1,59 @@
+"""A gate the tests hold blocks back with (diagnostics, like ``$DITHERLAB_BLOCK_LOG``).
+
+With ``$DITHERLAB_BLOCK_GATE`` naming a FIFO (``os.mkfifo``), every block computation
+(:func:`sweeps.workers.task.compute_block`, in whichever process runs it) takes one byte from it
+before it starts, and waits while there is none: the test holding the FIFO's write end lets
+exactly as many blocks through as it writes bytes, and closing it opens the gate for good.
+So a test can stop a sweep, or start a second submitter, while blocks are certainly still
+to run, instead of hoping that the machine is slow enough (no timing luck).
+
+With ``$DITHERLAB_BLOCK_GATE`` naming a folder instead (the batch-system tests, whose workers
+are jobs the test does not start), a block takes a ticket (a file ``ticket*``, removed) or
+passes once ``open`` exists, and a waiting process shows as ``waiting-<pid>`` there, so the
+test knows a worker is up and held.
+"""
+from __future__ import annotations
+
+import os
+import select
+import time
+
+GATE_ENV = "DITHERLAB_BLOCK_GATE"
+
+
+def pass_gate(path: str) -> None:
+    """Pass the gate at ``path``: a folder of tickets, or a FIFO (module docstring)."""
+    if os.path.isdir(path):
+        _take_ticket(path)
+    else:
+        _take_byte(path)
+
+
+def _take_ticket(folder: str) -> None:
+    """Wait for a ticket in ``folder`` (taken by removing it) or for ``folder/open``."""
+    waiting = os.path.join(folder, f"waiting-{os.getpid()}")
+    while not os.path.exists(os.path.join(folder, "open")):
+        if not os.path.exists(waiting):
+            open(waiting, "w").close()
+        for name in sorted(os.listdir(folder)):
+            if name.startswith("ticket"):
+                try:
+                    os.unlink(os.path.join(folder, name))
+                    return
+                except FileNotFoundError:   # another worker took it
+                    continue
+        time.sleep(0.05)   # a poll, not a wait for luck: the test decides when tickets exist
+
+
+def _take_byte(path: str) -> None:
+    """Take one byte from the FIFO at ``path``; wait while it is empty and held open."""
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)   # never waits for a writer to appear
+    try:
+        while True:
+            try:
+                os.read(fd, 1)   # one byte: through; b"" (no writer left): the gate is open
+                return
+            except BlockingIOError:   # empty and held: wait (another worker may win the byte)
+                select.select([fd], [], [])
+    finally:
+        os.close(fd)

@@ -1,0 +1,126 @@
+"""Workers that must match: a block is computed only by a worker that runs the submitter's
+engine (DESIGN.md §5).
+
+Each worker is asked once, as it is first seen, what it runs (``sweeps.workers.task.identity``:
+its results fingerprint and ditherlab version, computed from the modules *it* imports,
+through ``client.run`` pinned to that worker). A worker with another fingerprint, or one
+that cannot run the check at all (no ditherlab, an older one), gets no block: every task
+of the run is restricted to the matching workers (``workers=``,
+``allow_other_workers=False``), and the submitter says in one line which worker, which
+fingerprint, and what to do. With only foreign workers nothing is computed and the run
+ends with that line (:class:`ForeignWorkersError`, exit 1). The sink checks each block's
+own fingerprint again before journaling it (sweeps.run.sink), the last line of defence.
+
+:class:`MatchedClient` is the run's client with these restrictions applied to ``submit``
+and ``run``; everything else is the dask client's.
+"""
+from __future__ import annotations
+
+import logging
+import time
+
+from . import task
+from ..errors import UserError
+
+log = logging.getLogger("ditherlab")
+
+WAIT_TICK_S = 0.25   # how often a run waiting for a matching worker looks again
+SHOWN = 3            # foreign workers named in one line (the rest counted)
+
+
+class ForeignWorkersError(UserError):
+    """Workers are connected, and none runs this submitter's engine."""
+
+
+class WorkerCheck:
+    """The identity of every worker seen (asked once per worker address) and which match."""
+
+    def __init__(self, client):
+        self.client = client
+        self.own = task.identity()
+        self.seen: dict[str, dict | str] = {}   # address -> identity, or why the check failed
+        self.told: set[str] = set()
+
+    def matching(self) -> dict[str, int]:
+        """Address -> threads of every connected worker that runs this engine. Workers
+        seen for the first time are asked now; a foreign one is named once (a warning).
+        Raises :class:`ForeignWorkersError` when workers are connected and none matches."""
+        nthreads = self.client.nthreads()
+        new = [a for a in nthreads if a not in self.seen]
+        if new:
+            self.seen.update(self._ask(new))
+        for gone in set(self.seen) - set(nthreads):
+            del self.seen[gone]
+        foreign = [a for a in nthreads if a in self.seen and self.seen[a] != self.own]
+        good = {a: n for a, n in nthreads.items() if self.seen.get(a) == self.own}
+        if foreign and not good:
+            raise ForeignWorkersError(self.line(foreign, alone=True))
+        fresh = [a for a in foreign if a not in self.told]
+        if fresh:
+            self.told.update(fresh)
+            log.warning("%s", self.line(fresh, alone=False))
+        return good
+
+    def wait(self, should_stop=lambda: False) -> dict[str, int]:
+        """:meth:`matching` once it is not empty (batch jobs may still be starting); an
+        empty dict if ``should_stop()`` turned true first."""
+        while True:
+            good = self.matching()
+            if good or should_stop():
+                return good
+            time.sleep(WAIT_TICK_S)
+
+    def _ask(self, addresses: list[str]) -> dict[str, dict | str]:
+        try:
+            got = self.client.run(task.identity, workers=addresses, on_error="return")
+        except Exception as exc:  # noqa: BLE001 -- a worker left meanwhile: ask next time
+            log.debug("worker check failed (%s); asking again", exc)
+            return {}
+        return {a: r if isinstance(r, dict) else f"cannot run ditherlab's check "
+                f"({type(r).__name__}: {r})".replace("\n", " ") for a, r in got.items()}
+
+    def line(self, foreign: list[str], alone: bool) -> str:
+        """One line: which workers, which fingerprint, and what to do."""
+        own = self.own
+        shown = "; ".join(f"{a} {self._what(a)}" for a in foreign[:SHOWN])
+        more = f" and {len(foreign) - SHOWN} more" if len(foreign) > SHOWN else ""
+        fix = (f"start the workers from this installation (ditherlab {own['version']}, "
+               f"results fingerprint {own['fingerprint']}), or run on this machine's workers")
+        if alone:
+            return (f"no worker runs this engine, nothing was computed: {shown}{more}; {fix} "
+                    "and submit again (the journal keeps every finished block)")
+        return f"worker {shown}{more}: another engine, it gets no block of this sweep; {fix}"
+
+    def _what(self, address: str) -> str:
+        got = self.seen[address]
+        if isinstance(got, str):
+            return got
+        return f"runs results fingerprint {got['fingerprint']} (ditherlab {got['version']})"
+
+
+class MatchedClient:
+    """A dask client whose ``submit`` and ``run`` reach only the matching workers (waiting
+    for one if none is connected yet); ``check`` is the :class:`WorkerCheck`, ``scaler``
+    a batch cluster's :class:`sweeps.workers.batch.JobScaler` (None otherwise)."""
+
+    scaler = None
+
+    def __init__(self, client):
+        self.client, self.check = client, WorkerCheck(client)
+
+    def __getattr__(self, name):
+        return getattr(self.client, name)
+
+    def submit(self, *args, workers=None, **kwargs):
+        workers = list(workers or self.check.wait())
+        return self.client.submit(*args, workers=workers, allow_other_workers=False, **kwargs)
+
+    def run(self, *args, workers=None, **kwargs):
+        return self.client.run(*args, workers=list(workers or self.check.wait()), **kwargs)
+
+
+def matched(client):
+    """``client`` as a :class:`MatchedClient` (itself if it is one already; None stays None)."""
+    if client is None or isinstance(client, MatchedClient):
+        return client
+    return MatchedClient(client)

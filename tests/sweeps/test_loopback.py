@@ -1,0 +1,84 @@
+"""Nothing listens beyond loopback unless the user names an address (issue 28).
+
+``ditherlab submit`` on the default local cluster used to listen on 0.0.0.0 at a random
+port: the dask scheduler's own HTTP server (``/health`` answered "ok"). Every listening
+socket of ``submit`` and ``serve`` and of their worker processes is listed (psutil) while
+their blocks are held at ``$DITHERLAB_BLOCK_GATE`` (so the cluster is certainly up), and
+each must be bound to 127.0.0.1.
+"""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+
+from .conftest import SIMULATE_SPEC
+
+BIN = str(Path(sys.executable).parent / "ditherlab")
+
+
+def _listening(pid: int) -> list[tuple[int, str, int]]:
+    found = []
+    root = psutil.Process(pid)
+    for proc in [root, *root.children(recursive=True)]:
+        try:
+            found += [(proc.pid, c.laddr.ip, c.laddr.port) for c in proc.net_connections("inet")
+                      if c.status == psutil.CONN_LISTEN]
+        except psutil.NoSuchProcess:
+            continue
+    return found
+
+
+def _held_sockets(proc, gate: Path) -> list:
+    """The listening sockets once a worker waits at the gate (``waiting-<pid>``): the
+    cluster is up (a LocalCluster starts all its workers before the first block)."""
+    t0 = time.monotonic()
+    while not list(gate.glob("waiting-*")):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() - t0 < 600, "no worker reached the gate in 600 s"
+        time.sleep(0.2)
+    return _listening(proc.pid)
+
+
+@pytest.mark.parametrize("command", ["submit", "serve"])
+def test_every_socket_binds_loopback(command, tmp_path):
+    gate = tmp_path / "gate"
+    gate.mkdir()
+    spec = tmp_path / "sim.toml"
+    spec.write_text(SIMULATE_SPEC)
+    env = {**os.environ, "DITHERLAB_BLOCK_GATE": str(gate)}
+    store = str(tmp_path / "store")
+    if command == "serve":
+        subprocess.run([BIN, "submit", str(spec), "--store", store, "--detach", "-q"],
+                       check=True, env=env, timeout=300, capture_output=True)
+        args = [BIN, "serve", "--store", store, "-q"]
+    else:
+        args = [BIN, "submit", str(spec), "--store", store, "-q"]
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, cwd=tmp_path)
+    try:
+        sockets = _held_sockets(proc, gate)
+    finally:
+        (gate / "open").touch()
+        if command == "serve":
+            _wait_done(store)
+            proc.terminate()
+        out, err = proc.communicate(timeout=600)
+    assert sockets, "no listening socket found: the listing does not work"
+    wide = [s for s in sockets if s[1] != "127.0.0.1"]
+    assert not wide, f"listening beyond loopback: {wide}"
+
+
+def _wait_done(store: str) -> None:
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 600:
+        out = subprocess.run([BIN, "status", "--store", store], capture_output=True, text=True,
+                             timeout=60)
+        if " done " in f" {out.stdout} ":
+            return
+        time.sleep(0.5)

@@ -1,0 +1,197 @@
+"""The web view's promises of safety (issue 28), one test each: it only reads (GET and
+HEAD; a read-only store works; nothing in the store changes), no address becomes a path,
+a token beyond loopback (constant-time, never logged), every value escaped under a CSP
+that forbids inline scripts, bounded work per request, and a cube republished during a
+read is read whole."""
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+
+import pytest
+
+from .conftest import HOSTILE, request
+
+
+def _files(root):
+    """Every file of a store with its size and mtime (what a write would change)."""
+    out = {}
+    for folder, _, names in os.walk(root):
+        for n in names:
+            st = os.stat(os.path.join(folder, n))
+            out[os.path.join(folder, n)] = (st.st_size, st.st_mtime_ns)
+    return out
+
+
+@pytest.mark.parametrize("method", ["POST", "PUT", "DELETE", "PATCH", "OPTIONS"])
+def test_only_get_and_head_are_answered(server, web_store, method):
+    base, _ = server
+    for path in ("/", f"/sweep/{web_store['avg']}", f"/sweep/{web_store['avg']}/cube.nc",
+                 "/explorer", "/no/such/page"):
+        status, _, body = request(base, path, method, body=b"x=1")
+        assert status == 405, (method, path, status)
+        assert b"only reads" in body
+
+
+def test_head_answers_like_get_without_a_body(server, web_store):
+    base, _ = server
+    status, headers, body = request(base, f"/sweep/{web_store['avg']}/cube.nc", "HEAD")
+    assert status == 200 and body == b""
+    assert headers["Content-Type"] == "application/x-netcdf"
+
+
+HOSTILE_PATHS = [
+    "/sweep/../../etc/passwd", "/sweep/..%2F..%2Fetc%2Fpasswd", "/sweep/%2Fetc%2Fpasswd",
+    "/sweep/%2e%2e%2fcatalogue.sqlite", "/sweep/000000000000", "/sweep/web-avg",
+    "/static/..%2Fapp.py", "/static/%2e%2e/app.py", "/static/app.py", "/static//etc/passwd",
+    "/gallery/..%2F..%2Fcatalogue.sqlite", "/gallery/%2Fetc%2Fpasswd", "//etc/passwd",
+    "/etc/passwd", "/catalogue.sqlite", "/sweep/{avg}/..%2F..%2Fcatalogue.sqlite",
+    "/sweep/{avg}/map/..%2F..%2Fx.png", "/sweep/{avg}/cube.nc%2F..%2F..%2Fcatalogue.sqlite",
+    "/sweep/{prefix}", "/sweep/{avg}/journal", "/sweep/{avg}/spec.json",
+]
+
+
+@pytest.mark.parametrize("path", HOSTILE_PATHS)
+def test_no_address_becomes_a_path(server, web_store, path):
+    base, _ = server
+    path = path.format(avg=web_store["avg"], prefix=web_store["avg"][:6])
+    status, _, body = request(base, path)
+    assert status == 404, (path, status, body[:200])
+    assert b"root:" not in body and b"SQLite" not in body
+
+
+def test_a_read_only_store_is_served_and_no_request_writes(web_store, serve_ctx, read_only):
+    from sweeps.web.app import Context
+
+    ro = read_only(web_store["root"])
+    before = _files(web_store["root"])
+    base = serve_ctx(Context(ro))
+    sid = web_store["avg"]
+    for path in ("/", "/api/sweeps?after=0", f"/sweep/{sid}", f"/api/sweep/{sid}",
+                 f"/sweep/{sid}/cube.nc", f"/sweep/{sid}/query.csv?sel.v_d=0.1",
+                 f"/sweep/{sid}/query.json?var=stable&sel.v_d=0.01",
+                 f"/sweep/{sid}/map/stability.png?sel.v_d=0.1",
+                 f"/sweep/{sid}/map/friction.svg?sel.v_d=0.1&pick=3"):
+        status, _, body = request(base, path)
+        assert status == 200, (path, status, body[:300])
+    assert _files(web_store["root"]) == before
+
+
+def test_a_sweep_named_like_a_script_shows_as_text_under_a_strict_csp(server, web_store):
+    base, _ = server
+    for path in ("/", f"/sweep/{web_store['tiny']}", f"/?q={HOSTILE[:7]}"):
+        status, headers, body = request(base, path.replace("<", "%3C"))
+        assert status == 200
+        assert HOSTILE.encode() not in body
+        assert b"&lt;script&gt;alert(1)&lt;/script&gt;" in body
+        csp = headers["Content-Security-Policy"]
+        script_src = next(p for p in csp.split(";") if "script-src" in p)
+        assert script_src.split() == ["script-src", "'self'"]   # no inline, no other origin
+        assert "default-src 'none'" in csp and "http" not in csp
+        assert b"<script>" not in body.replace(b'<script src="/static/', b"")
+
+
+def test_oversized_work_is_refused_in_one_sentence(server, web_store, monkeypatch):
+    from sweeps.web import downloads
+
+    base, _ = server
+    sid = web_store["avg"]
+    status, _, body = request(base, "/explorer/stability.png?W_num=401&v_ref_num=10")
+    assert status == 400 and body.count(b"\n") == 1 and b"400" in body
+    monkeypatch.setattr(downloads, "MAX_CELLS", 100)
+    status, _, body = request(base, f"/sweep/{sid}/query.csv")
+    assert status == 413 and body.count(b"\n") == 1 and b"cells" in body
+    status, _, body = request(base, f"/sweep/{sid}/query.csv?sel.v_d=nan")
+    assert status == 400 and b"NaN" in body
+    status, _, body = request(base, f"/sweep/{sid}/map/friction.png?pick=100000")
+    assert status == 400 and body.count(b"\n") == 1
+
+
+def test_map_renders_beyond_the_cap_are_refused_not_queued(server, web_store):
+    """The render queue is full (its slots held by the test, not by timing): 503."""
+    from concurrent.futures import Future
+
+    base, ctx = server
+    held = Future()
+    for i in range(ctx.maps.max_waiting):
+        ctx.maps._pending[("held", i)] = held
+    try:
+        status, _, body = request(base, f"/sweep/{web_store['avg']}/map/stability.png"
+                                        "?sel.v_d=0.01")
+        assert status == 503 and b"try again" in body
+    finally:
+        ctx.maps._pending.clear()
+
+
+def test_a_second_explorer_computation_is_refused_while_one_runs(server):
+    base, ctx = server
+    ctx.explorer._running = "someone else's"
+    try:
+        status, _, body = request(base, "/explorer/stability.png?W_num=5&v_ref_num=5")
+        assert status == 503 and b"another explorer computation" in body
+    finally:
+        ctx.explorer._running = None
+
+
+def test_a_cube_republished_during_a_read_is_read_whole(web_store, tmp_path):
+    """The publish (a rename over cube.nc) happens between the open and the read: the
+    read returns the old cube whole; the next read finds the new one."""
+    from sweeps.web.snapshot import CubeSnapshot, Cubes, read_cube_bytes
+
+    old = web_store["root"] / web_store["avg"] / "cube.nc"
+    new = web_store["root"] / web_store["tiny"] / "cube.nc"
+    path = tmp_path / "cube.nc"
+    shutil.copy(old, path)
+
+    def publish():
+        shutil.copy(new, tmp_path / "tmp.nc")
+        os.replace(tmp_path / "tmp.nc", path)
+
+    key, data = read_cube_bytes(path, after_open=publish)
+    assert data == old.read_bytes()
+    assert CubeSnapshot(key, data).ds.attrs["sweep_id"] == web_store["avg"]
+    assert Cubes().get(path).ds.attrs["sweep_id"] == web_store["tiny"]
+
+
+TOKEN = "t0k3n-" + "x" * 40
+
+
+def test_a_token_is_needed_compared_and_never_logged(web_store, serve_ctx, caplog):
+    from sweeps.web.app import Context
+
+    base = serve_ctx(Context(web_store["root"], token=TOKEN))
+    caplog.set_level(logging.DEBUG, logger="ditherlab")   # the access log's logger
+    assert request(base, "/")[0] == 401
+    assert request(base, "/", headers={"Authorization": "Bearer " + "y" * len(TOKEN)})[0] == 401
+    assert request(base, "/", headers={"Authorization": f"Bearer {TOKEN}"})[0] == 200
+    status, headers, _ = request(base, f"/sweep/{web_store['avg']}?token={TOKEN}")
+    assert status == 302 and headers["Location"] == f"/sweep/{web_store['avg']}"
+    cookie = headers["Set-Cookie"].split(";")[0]
+    assert "HttpOnly" in headers["Set-Cookie"] and "SameSite=Strict" in headers["Set-Cookie"]
+    assert request(base, "/api/sweeps", headers={"Cookie": cookie})[0] == 200
+    assert request(base, f"/?token={TOKEN[:-1]}Z")[0] == 401
+    logged = "\n".join(r.getMessage() for r in caplog.records)
+    assert "GET /sweep/" in logged   # the access log was on
+    assert TOKEN not in logged and TOKEN[:-1] not in logged
+
+
+def test_the_token_rules(tmp_path):
+    from sweeps.errors import RefusedError
+    from sweeps.web import security
+
+    assert security.server_token("127.0.0.1", None) == (None, False)
+    assert security.server_token("::1", None) == (None, False)
+    token, generated = security.server_token("0.0.0.0", None)
+    assert generated and len(token) >= 32
+    assert security.server_token("10.1.2.3", None)[0] != token
+    f = tmp_path / "token"
+    f.write_text(TOKEN + "\n")
+    assert security.server_token("0.0.0.0", str(f)) == (TOKEN, False)
+    f.write_text("short")
+    with pytest.raises(RefusedError, match="at least 16"):
+        security.server_token("0.0.0.0", str(f))
+    assert security.parse_bind(":8700") == ("127.0.0.1", 8700)
+    assert security.parse_bind("[::1]:9") == ("::1", 9)
+    with pytest.raises(RefusedError, match="HOST:PORT"):
+        security.parse_bind("8700")
