@@ -18,7 +18,7 @@ from .observables import N_HIST
 from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
 
-POINT_AXES = ("W", "omega", "v_ref", "vd")
+POINT_AXES = P.POINT_AXES   # the columns of ``points``
 
 
 @dataclass

@@ -37,6 +37,23 @@ def switch_time(k, omega):
     return k * (np.pi / omega)
 
 
+@njit(cache=True, error_model="numpy")
+def fixed_step(kind, omega, steps_per_period, h_free):
+    """The step of a fixed-step method at dither frequency ``omega``: the square wave's
+    half-period ``pi / omega`` or a sine's period ``2 pi / omega`` divided into
+    ``steps_per_period`` steps (so steps land on the switches and period ends), else
+    ``h_free`` (no dither, or no finite positive omega). ``kind`` is a :data:`CODE`. The
+    driver sets each point's step with it (engine.integrators.driver), and the spec-time
+    checks size a fixed step with it (sweeps.spec.accuracy, sweeps.spec.fixed_step)."""
+    if not omega > 0.0 or not np.isfinite(omega):   # no period to divide
+        return h_free
+    if kind == SQUARE_VELOCITY:
+        return (np.pi / omega) / steps_per_period
+    if kind != NONE:
+        return (2.0 * np.pi / omega) / steps_per_period
+    return h_free
+
+
 @njit(cache=True)
 def square_sign(k):
     """sq(omega t) on half-period k, i.e. for t in (t_k, t_{k+1}): +1 for even k."""

@@ -31,6 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -57,16 +58,17 @@ def _plan(spec: dict):
     return make_plan(load_spec(spec, max_points=2_000_000))
 
 
-def instant_block(scene, points, p, settings) -> dict:
+def instant_block(scene, points, p, settings, index=None):
     """``sweeps.workers.task.compute_block`` computing nothing: what a worker returns for
-    ``points``, at once, every value noise."""
+    ``points`` (a store.BlockRecord), at once, every value noise."""
+    from store.record import BlockRecord
     from sweeps.version import results_fingerprint
 
     n, rng = len(points), np.random.default_rng(len(points))
     out = {k: rng.random((n, 10) if k == "alpha_hist" else n) for k in scene.outputs}
-    return {**out, "status": np.zeros(n, np.int8), "cost_s": rng.random(n),
-            "steps": rng.integers(1, 10**6, n), "evals": rng.integers(1, 10**6, n),
-            "fingerprint": results_fingerprint()}
+    return BlockRecord(np.arange(n) if index is None else index, np.zeros(n), rng.random(n),
+                       rng.integers(1, 10**6, n), rng.integers(1, 10**6, n), out,
+                       fingerprint=results_fingerprint())
 
 
 def _sweep(plan, root: Path):
@@ -95,11 +97,12 @@ def sink_run(plan, root: Path, group: int = 1) -> tuple[float, float, int]:
 
     sweep, lease, cube, sink = _sweep(plan, root)
     n = len(plan.blocks)
-    results = {len(index): instant_block(plan.scene, plan.block_points(b), None, None)
-               for b, index in enumerate(plan.blocks)}   # one per block size: made once,
-    t, c = time.perf_counter(), time.process_time()     # the worker's work, not ours
-    for i in range(0, n, group):
-        sink.many([(b, results[len(plan.blocks[b])]) for b in range(i, min(n, i + group))])
+    noise = {len(index): instant_block(plan.scene, plan.block_points(b), None, None)
+             for b, index in enumerate(plan.blocks)}   # values made once per block size
+    t, c = time.perf_counter(), time.process_time()
+    for i in range(0, n, group):   # (a record per block, as the dispatch hands them over)
+        sink.many([(b, replace(noise[len(plan.blocks[b])], index=plan.blocks[b]))
+                   for b in range(i, min(n, i + group))])
     seconds, cpu = time.perf_counter() - t, time.process_time() - c
     store.publish(cube, sweep.cube)
     lease.end("done")

@@ -17,11 +17,9 @@ How the sweep runner uses it (the submitting process is the only writer)::
     cube = store.rebuild(empty, journal)                # what earlier runs finished
     store.publish(cube, sweep.cube)                     # a valid cube from the start
     todo = [b for b in blocks if b.id not in journal.done()]      # resume
-    for block, result in finished(todo):                # as dask futures complete
-        payload = store.block_payload(block.flat_index, result.outputs, result.status,
-                                      result.cost_s, result.steps, result.evals)
-        journal.write(block.id, payload)                # durable from here on
-        store.fill_block(cube, payload)                 # O(block), no re-read
+    for block_id, record in finished(todo):             # store.BlockRecord, as dask
+        journal.write(block_id, record)                 # futures complete; durable now
+        store.fill(cube, record)                        # O(block), no re-read
         if every_few_seconds_or_last:
             store.publish(cube, sweep.cube)             # atomic replace
             counts = store.status_counts(cube)
@@ -43,15 +41,16 @@ Public API
 cube / points / cube_io
     ``AXES``; ``empty_cube(coords, variables, attrs=None, axis_units=None,
     axis_long_names=None) -> Cube`` (``store.cubedata``: numpy arrays, dims, attributes;
-    ``.to_dataset()`` for xarray); ``output_names(ds)``; ``fill(ds, flat_index,
-    values, status, cost_s, steps, evals)``; ``grid_points(ds, flat_index=None) -> (n, 4)``;
+    ``.to_dataset()`` for xarray); ``output_names(ds)``; ``fill(ds, record)``;
+    ``grid_points(ds, flat_index=None) -> (n, 4)``;
     ``pending_index(ds)``; ``status_counts(ds)``; ``publish(ds, path) -> Path``;
     ``open_cube(path) -> xarray.Dataset``; ``read_cube(path) -> Cube``; status codes
     ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
-journal
-    ``Journal(folder)`` with ``.write(block_id, payload)``, ``.done() -> set[int]``,
-    ``.read() -> Iterator[(block_id, payload)]``; ``block_payload(...)``;
-    ``fill_block(ds, payload)``; ``rebuild(ds_empty, journal) -> Cube``.
+record / journal
+    ``BlockRecord(index, status, cost_s, steps, evals, outputs)``: one block's results from
+    the worker to the journal to the cube; ``Journal(folder)`` with ``.write(block_id,
+    record)``, ``.done() -> set[int]``, ``.read() -> Iterator[(block_id, record)]``;
+    ``rebuild(ds_empty, journal) -> Cube``.
 catalogue
     ``Catalogue(store_root)`` with ``register``, ``update``, ``get``, ``find``,
     ``list``, ``scan``; ``STATES``.
@@ -73,7 +72,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
     submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "cubedata",
                 "errors",
-                "header", "journal", "layout", "lease", "maps", "points", "query", "status"],
+                "header", "journal", "layout", "lease", "maps", "points", "query", "record",
+                "status"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
@@ -81,7 +81,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "cube_io": ["open_cube", "publish", "read_cube"],
         "cubedata": ["Cube", "as_dataset"],
         "header": ["read_header"],
-        "journal": ["Journal", "block_payload", "fill_block", "rebuild"],
+        "journal": ["Journal", "rebuild"],
+        "record": ["BlockRecord"],
         "atomic": ["atomic_write"],
         "layout": ["SweepDir", "default_store"],
         "points": ["fill", "grid_points", "pending_index", "status_counts"],

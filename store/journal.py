@@ -8,19 +8,19 @@ with a final name is always complete. The cube is rebuilt from the journal (``re
 and published every few blocks and at the end; a resumed sweep computes only the blocks
 the journal lacks.
 
-A block's payload is a flat dict of arrays with one row per point: ``index`` (int64,
-C-order flat indices, store.cube), ``status`` (int8, codes 0..3), ``cost_s`` (float64
-seconds), ``steps`` and ``evals`` (int64), and one float64 array per cube output, e.g.
-``F_mean`` (``(n, k)`` for a vector output such as ``alpha_hist``). ``block_payload``
-builds it from the same arguments as ``store.points.fill``.
+A block is a :class:`store.record.BlockRecord` (the same record the worker made and
+``store.points.fill`` writes into the cube); its file holds one array per field and output,
+named as the record's fields (``index``, ``status``, ``cost_s``, ``steps``, ``evals``) and
+outputs (``F_mean``, ...).
 
 Every file also holds ``_sha256``: the SHA-256 of its block id (group number) and of each
 array's name, dtype, shape and bytes. Reading checks it, the fields and dtypes, and
 (``rebuild``) the cube's shape, index range and status codes and the plan's points of the
 block. A file that fails any check, or has no checksum (older journals, other programs),
 is never read as data: it is moved to ``journal/bad/`` with one warning line and its
-points are computed again. ``_engine``, inside the checksum, is the results fingerprint
-of the worker that computed the blocks (``Journal.engine_of``).
+points are computed again. ``_engine``, inside the checksum, is the records'
+``fingerprint``, the results fingerprint of the worker that computed the blocks
+(``Journal.load(b).fingerprint``).
 """
 
 from __future__ import annotations
@@ -40,9 +40,8 @@ import numpy as np
 from . import journal_groups as groups
 from .atomic import atomic_write, remove_stale_temps
 from .points import fill
+from .record import BlockRecord
 
-FIELDS = {"index": np.int64, "status": np.int8, "cost_s": np.float64, "steps": np.int64,
-          "evals": np.int64}
 CHECKSUM = "_sha256"
 ENGINE = "_engine"   # the results fingerprint of the worker that computed the block (ASCII)
 BAD_DIR = "bad"
@@ -55,44 +54,6 @@ class JournalWarning(UserWarning):
 
 class BadBlock(ValueError):
     """Why a block file cannot be trusted (the warning's text)."""
-
-
-def block_payload(
-    flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
-) -> dict[str, np.ndarray]:
-    """A journal payload from the arguments of ``store.points.fill`` (see module doc)."""
-    payload = {"index": flat_index, "status": status, "cost_s": cost_s, "steps": steps,
-               "evals": evals}
-    clash = sorted(set(values) & set(payload))
-    if clash:
-        raise ValueError(
-            f"block_payload: output names {clash} clash with the journal's own fields {sorted(FIELDS)}"
-        )
-    payload.update(values)
-    return _checked(payload)
-
-
-def _checked(payload: Mapping[str, np.ndarray], strict: bool = False) -> dict[str, np.ndarray]:
-    """The payload's arrays with the journal's dtypes (``strict``: they must have them)."""
-    missing = [k for k in FIELDS if k not in payload]
-    if missing:
-        raise ValueError(
-            f"journal payload lacks {missing}; build it with store.journal.block_payload"
-        )
-    if strict:
-        wrong = {k: str(np.asarray(v).dtype) for k, v in payload.items()
-                 if np.asarray(v).dtype != FIELDS.get(k, np.float64)}
-        if wrong:
-            raise ValueError(f"journal payload has wrong dtypes {wrong}")
-    out = {k: np.asarray(v, dtype=FIELDS.get(k, np.float64)) for k, v in payload.items()}
-    n = out["index"].shape
-    # one row per point; an output may carry one extra trailing axis (alpha_hist)
-    bad = {k: v.shape for k, v in out.items()
-           if v.shape[:1] != n or v.ndim > (1 if k in FIELDS else 2)}
-    if bad:
-        raise ValueError(f"journal payload arrays must have index's length {n[0]} first "
-                         f"(1-D, or 2-D for a vector output); got {bad}")
-    return out
 
 
 def checksum(block_id: int, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -113,8 +74,13 @@ def block_bytes(n_points: int, n_values: int) -> int:
 
 
 class Journal:
-    """The journal folder of one sweep: ``Journal(SweepDir(store_root, id).journal)``;
-    ``folder`` is created on the first write."""
+    """The journal folder of one sweep: ``Journal(SweepDir(store_root, id).journal)``.
+
+    Parameters
+    ----------
+    folder
+        The journal folder; created on the first ``write``.
+    """
 
     def __init__(self, folder):
         self.folder = Path(folder)
@@ -129,33 +95,32 @@ class Journal:
             raise ValueError(f"block_id must be a non-negative integer, got {block_id!r}")
         return self.folder / f"block-{int(block_id):06d}.npz"
 
-    def write(self, block_id: int, payload: Mapping[str, np.ndarray],
-              engine: str | None = None) -> Path:
+    def write(self, block_id: int, record: BlockRecord) -> Path:
         """Record a finished block atomically (temporary name, fsync, rename), with its
-        checksum and (``engine``) the fingerprint of the engine that computed it. Free
-        space is checked first (``store.errors.NoSpaceError``). Writing a block again
-        replaces it. Returns the file's path."""
+        checksum and the record's ``fingerprint`` (the engine that computed it; none if
+        None). Free space is checked first (``store.errors.NoSpaceError``). Writing a block
+        again replaces it. Returns the file's path."""
         path = self.path(block_id)
-        arrays = _checked(payload)
-        if engine is not None:
-            arrays[ENGINE] = np.frombuffer(engine.encode("ascii"), np.uint8)
+        arrays = record.arrays()
+        if record.fingerprint is not None:
+            arrays[ENGINE] = np.frombuffer(record.fingerprint.encode("ascii"), np.uint8)
         buf = io.BytesIO()
         np.savez(buf, **arrays, **{CHECKSUM: checksum(block_id, arrays)})
         return atomic_write(path, buf.getbuffer())
 
-    def write_group(self, items: list[tuple[int, Mapping[str, np.ndarray]]],
-                    engine: str | None = None) -> Path:
-        """Record finished blocks ``(block_id, payload)`` as one group file (as
-        :meth:`write`, one fsync for them all: store.journal_groups). Returns its path."""
+    def write_group(self, items: list[tuple[int, BlockRecord]]) -> Path:
+        """Record finished blocks ``(block_id, record)`` of one engine (their fingerprint)
+        as one group file, as :meth:`write` but one fsync for them all
+        (store.journal_groups). Returns its path."""
+        prints = {r.fingerprint for _, r in items}
+        if len(prints) != 1:
+            raise ValueError(f"journal group: blocks of several engines {sorted(map(str, prints))}")
+        engine = prints.pop()
         extra = {} if engine is None else {ENGINE: np.frombuffer(engine.encode("ascii"), np.uint8)}
-        items = [(b, _checked(p)) for b, p in items if self.path(b)]   # (ids checked)
+        arrays = [(b, r.arrays()) for b, r in items if self.path(b)]   # (ids checked)
         self._seq = groups.next_seq(self.folder) if self._seq is None else self._seq + 1
         return atomic_write(self.folder / groups.file_name(self._seq),
-                            groups.image(self._seq, items, extra, CHECKSUM))
-
-    def engine_of(self, block_id: int) -> str | None:
-        """The fingerprint of the engine that computed a verified block (None: not recorded)."""
-        return self._verified(block_id, self._where(block_id))[1]
+                            groups.image(self._seq, arrays, extra, CHECKSUM))
 
     def files(self) -> dict[int, Path]:
         """Block id -> file (its block file, or the last group holding it), unverified.
@@ -171,24 +136,31 @@ class Journal:
         return self.files().get(block_id) or self.path(block_id)
 
     def load(self, block_id: int, path: Path | None = None, memo: dict | None = None
-             ) -> dict[str, np.ndarray]:
-        """The verified payload of one block file; ``BadBlock`` saying why it cannot be
-        trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
+             ) -> BlockRecord:
+        """The verified record of one block (its file, or its group file: ``memo`` a dict
+        kept while reading a journal, store.journal_groups.block); ``BadBlock`` saying why
+        it cannot be trusted (unreadable, no or wrong checksum, fields or dtypes wrong)."""
         path = self._where(block_id) if path is None else path
-        arrays, _ = self._verified(block_id, path, memo)
+        arrays = self._group_block(block_id, path, memo) if groups.NAME.match(path.name) \
+            else self._block_file(block_id, path)
+        engine = arrays.pop(ENGINE, None)
         try:
-            return _checked(arrays, strict=True)
+            record = BlockRecord.from_arrays(arrays, strict=True)
         except ValueError as err:
             raise BadBlock(_brief(err)) from None
+        record.fingerprint = None if engine is None else engine.tobytes().decode("ascii",
+                                                                                 "replace")
+        return record
 
-    def _verified(self, block_id: int, path: Path, memo: dict | None = None
-                  ) -> tuple[dict, str | None]:
-        """The arrays of a block file whose checksum holds, and its engine fingerprint."""
-        if groups.NAME.match(path.name):   # a block of a group file, which is checked whole
-            try:
-                return self._engine(groups.block(path, block_id, CHECKSUM, memo))
-            except Exception as err:  # noqa: BLE001 -- as below: unreadable, checksum...
-                raise BadBlock(f"group {path.name}, all its blocks: {_brief(err)}") from None
+    @staticmethod
+    def _group_block(block_id: int, path: Path, memo: dict | None) -> dict:
+        try:
+            return groups.block(path, block_id, CHECKSUM, memo)
+        except Exception as err:  # noqa: BLE001 -- as a block file's: unreadable, checksum...
+            raise BadBlock(f"group {path.name}, all its blocks: {_brief(err)}") from None
+
+    @staticmethod
+    def _block_file(block_id: int, path: Path) -> dict:
         try:
             with open(path, "rb") as f, np.load(f, allow_pickle=False) as npz:
                 arrays = {k: npz[k] for k in npz.files}
@@ -200,16 +172,11 @@ class Journal:
                            "another program)")
         if not np.array_equal(stored, checksum(block_id, arrays)):
             raise BadBlock("checksum mismatch (the file changed after it was written)")
-        return self._engine(arrays)
-
-    @staticmethod
-    def _engine(arrays: dict) -> tuple[dict, str | None]:
-        engine = arrays.pop(ENGINE, None)
-        return arrays, None if engine is None else engine.tobytes().decode("ascii", "replace")
+        return arrays
 
     def read(self, blocks: Sequence[np.ndarray] | None = None, repair: bool = True
-             ) -> Iterator[tuple[int, dict[str, np.ndarray]]]:
-        """Yield ``(block_id, payload)`` for every verified block, in id order.
+             ) -> Iterator[tuple[int, BlockRecord]]:
+        """Yield ``(block_id, record)`` for every verified block, in id order.
 
         ``blocks`` (the plan's flat indices per block id) also refuses a block whose
         points are not those of its id. A refused block is set aside (``set_aside``)
@@ -219,14 +186,14 @@ class Journal:
         memo: dict = {}
         for block_id, path in sorted(self.files().items()):
             try:
-                payload = self.load(block_id, path, memo)
+                record = self.load(block_id, path, memo)
                 if blocks is not None:
-                    _check_plan(block_id, payload["index"], blocks)
+                    _check_plan(block_id, record.index, blocks)
             except BadBlock as err:
                 if repair:
                     self.set_aside(block_id, str(err), path)
                 continue
-            yield block_id, payload
+            yield block_id, record
 
     def done(self, blocks: Sequence[np.ndarray] | None = None) -> set[int]:
         """Ids of the blocks with a verified file (bad ones are set aside)."""
@@ -268,12 +235,6 @@ def _warn(message: str) -> None:
     warnings.warn(message, JournalWarning, stacklevel=3)
 
 
-def fill_block(ds, payload: Mapping[str, np.ndarray]) -> None:
-    """``store.points.fill`` from a journal payload."""
-    values = {k: v for k, v in payload.items() if k not in FIELDS}
-    fill(ds, payload["index"], values, *(payload[k] for k in ("status", "cost_s", "steps", "evals")))
-
-
 def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = None,
             repair: bool = True):
     """A new cube: a deep copy of ``ds_empty`` with every verified journal block filled in.
@@ -285,9 +246,9 @@ def rebuild(ds_empty, journal: Journal, blocks: Sequence[np.ndarray] | None = No
     itself is not modified.
     """
     ds = ds_empty.copy(deep=True)
-    for block_id, payload in journal.read(blocks, repair=repair):
+    for block_id, record in journal.read(blocks, repair=repair):
         try:
-            fill_block(ds, payload)   # checks everything before it writes anything
+            fill(ds, record)   # checks everything before it writes anything
         except ValueError as err:
             if repair:
                 journal.set_aside(block_id, f"it does not fit the cube ({_brief(err)})")

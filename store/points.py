@@ -1,14 +1,13 @@
 """Points of a cube by flat index (C order over ``AXES``; store.cube): checking an
-index, the parameter rows of points, status counts, and :func:`fill`, which writes the
-results of some points into a cube in memory."""
+index, the parameter rows of points, status counts, and :func:`fill`, which writes a
+block's results (a :class:`store.record.BlockRecord`) into a cube in memory."""
 
 from __future__ import annotations
-
-from collections.abc import Mapping
 
 import numpy as np
 
 from .cube import AXES, output_names, shape_of
+from .record import BlockRecord
 from .status import OK, STATUS_MEANINGS
 
 
@@ -52,50 +51,36 @@ def status_counts(ds) -> dict[str, int]:
     return {m: int(c) for m, c in zip(STATUS_MEANINGS, counts)}
 
 
-def _columns(ds, n, values, status, cost_s, steps, evals) -> dict[str, np.ndarray]:
+def _columns(ds, record: BlockRecord) -> dict[str, np.ndarray]:
     outputs = output_names(ds)
+    values = record.outputs
     missing, extra = sorted(set(outputs) - set(values)), sorted(set(values) - set(outputs))
     if missing or extra:
-        raise ValueError(
-            f"fill: values must have exactly the cube's outputs {outputs}; missing {missing}, unknown {extra}"
-        )
-    columns = {**values, "status": status, "cost_s": cost_s, "steps": steps, "evals": evals}
-    columns = {k: np.asarray(v) for k, v in columns.items()}
+        raise ValueError(f"fill: the record must have exactly the cube's outputs {outputs}; "
+                         f"missing {missing}, unknown {extra}")
+    columns = {k: v for k, v in record.arrays().items() if k != "index"}
     for name, col in columns.items():
-        expected = (n,) + tuple(ds[name].shape[len(AXES):])
+        expected = (len(record),) + tuple(ds[name].shape[len(AXES):])
         if col.shape != expected:
             raise ValueError(f"fill: {name} has shape {col.shape}, expected {expected} "
-                             "like flat_index")
-    bad = ~np.isin(columns["status"], np.arange(len(STATUS_MEANINGS)))
+                             "like index")
+    bad = ~np.isin(record.status, np.arange(len(STATUS_MEANINGS)))
     if bad.any():
-        raise ValueError(
-            f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got {np.unique(columns['status'][bad]).tolist()}"
-        )
+        raise ValueError(f"fill: status codes must be in 0..{len(STATUS_MEANINGS) - 1}, got "
+                         f"{np.unique(record.status[bad]).tolist()}")
     return columns
 
 
-def fill(
-    ds, flat_index, values: Mapping[str, np.ndarray], status, cost_s, steps, evals
-) -> None:
-    """Write the results of some points into ``ds`` in place.
-
-    Parameters
-    ----------
-    ds
-        A cube from ``empty_cube`` or ``rebuild`` (a ``store.cubedata.Cube``, in memory).
-    flat_index
-        ``(n,)`` int, C-order flat indices over ``AXES``.
-    values
-        Output name -> ``(n,)`` float; exactly the cube's outputs.
-    status
-        ``(n,)`` int codes 0..3; ``cost_s`` ``(n,)`` seconds; ``steps``, ``evals`` ``(n,)`` int.
+def fill(ds, record: BlockRecord) -> None:
+    """Write a block's results into ``ds`` in place: ``ds`` a cube from ``empty_cube`` or
+    ``rebuild`` (a ``store.cubedata.Cube``, in memory), ``record`` the results at its flat
+    indices, with exactly the cube's outputs.
 
     Everything is checked before anything is written, so a refused call leaves ``ds``
     unchanged.
     """
-    idx = check_index(ds, flat_index)
-    columns = _columns(ds, idx.size, values, status, cost_s, steps, evals)
-    for name, col in columns.items():
+    idx = check_index(ds, record.index)
+    for name, col in _columns(ds, record).items():
         var = ds[name]
         flat = var.data.reshape((-1,) + var.shape[len(AXES):])   # a view: points first
         flat[idx] = col

@@ -54,7 +54,8 @@ def _refuse_in_spawned_import() -> None:
     ``__mp_main__`` (multiprocessing's 'spawn'). A script that calls :func:`run_sweep` at its
     top level, not under ``if __name__ == "__main__":``, would have each worker run the
     sweep again (and wait forever on the first run's lease): the worker says so in one line
-    and exits, and the submitter's cluster start fails (:func:`sweeps.workers.cluster.dask_client`)."""
+    and exits, and the submitter's cluster start fails
+    (:func:`sweeps.workers.cluster.dask_client`)."""
     frame = sys._getframe(1)
     while frame is not None:
         if frame.f_globals.get("__name__") == "__mp_main__":   # this worker dies quietly

@@ -13,17 +13,19 @@ transaction; a process computes a sweep's blocks only while it holds the sweep's
   journal keeps them), goes back to ``queued`` with a message, and serve exits 0. A second
   signal stops at once (the journal still keeps every finished block).
 - A foreground ``submit`` takes the lease (``Catalogue.acquire``). If a live process holds it,
-  the submitter *attaches* (:func:`sweeps.run.progress.attach`): it computes nothing, prints the progress the
-  holder writes to the catalogue, and returns the final result. If the holder dies (its pid is
-  gone on this host, or its heartbeat is older than ``STALE_S``), the attached submitter takes
-  the lease over and computes the blocks still missing from the journal.
+  the submitter *attaches* (:func:`sweeps.run.progress.attach`): it computes nothing,
+  prints the progress the holder writes to the catalogue, and returns the final result.
+  If the holder dies (its pid is gone on this host, or its heartbeat is older than
+  ``STALE_S``), the attached submitter takes the lease over and computes the blocks still
+  missing from the journal.
 - ``ditherlab cancel`` (:func:`cancel`): a queued sweep is cancelled at once; a running one is
-  flagged, and its runner, which asks the catalogue between blocks (:meth:`sweeps.run.lease_holder.Lease.stop_reason`),
-  stops after its in-flight blocks.
+  flagged, and its runner, which asks the catalogue between blocks
+  (:meth:`sweeps.run.lease_holder.Lease.stop_reason`), stops after its in-flight blocks.
 
 While it holds a lease a runner beats every ``HEARTBEAT_S`` seconds from a thread
-(:class:`sweeps.run.lease_holder.Lease`); a beat that finds the lease taken over stops the runner too, so a block is
-never computed by two processes that both believe they own the sweep.
+(:class:`sweeps.run.lease_holder.Lease`); a beat that finds the lease taken over stops the
+runner too, so a block is never computed by two processes that both believe they own the
+sweep.
 """
 from __future__ import annotations
 

@@ -10,11 +10,11 @@ Stops (DESIGN.md §1: "an integrator must step exactly onto them, never across t
   period boundaries (``period_stops``); the sign stays +1 and caches stay valid.
 - always ``t_transient`` (the observer starts there) and ``t_end``.
 
-The fixed step of non-adaptive methods (``cfg.h``) is set here per point:
-``(pi / omega) / steps_per_period`` for a square wave (divides the half-period),
-``(2 pi / omega) / steps_per_period`` for a sine (divides the period), ``Settings.h`` without
-dither or without a finite positive omega (methods split each segment into
-``ceil(length / h)`` equal steps).
+The fixed step of non-adaptive methods (``cfg.h``) is set here per point by
+:func:`engine.dither.fixed_step`: ``(pi / omega) / steps_per_period`` for a square wave
+(divides the half-period), ``(2 pi / omega) / steps_per_period`` for a sine (divides the
+period), ``Settings.h`` without dither or without a finite positive omega (methods split
+each segment into ``ceil(length / h)`` equal steps).
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import params as P
 from .. import status as S
-from ..dither import CODE, NONE, SQUARE_VELOCITY, square_sign, switch_time
+from ..dither import CODE, NONE, SQUARE_VELOCITY, fixed_step, square_sign, switch_time
 from ..jit import njit
 from .problem import FRESH_NONE, FRESH_START, FRESH_SWITCH
 
@@ -41,7 +41,7 @@ def make_solve(stepper, observer, dither: str):
     @njit(error_model="numpy", refcount=False)
     def solve(work, y, p, cfg, obs, ctr, rec):
         t_end, t_tr, omega = p[P.T_END], p[P.T_TRANSIENT], p[P.OMEGA]
-        cfg.h = _nominal_step(kind, omega, cfg)
+        cfg.h = fixed_step(kind, omega, cfg.steps_per_period, cfg.h_free)
         t = 0.0
         k = 1
         sq = 1.0
@@ -76,15 +76,3 @@ def make_solve(stepper, observer, dither: str):
                 return S.NON_FINITE
         return S.OK
     return solve
-
-
-@njit(error_model="numpy", refcount=False)
-def _nominal_step(kind, omega, cfg):
-    n = cfg.steps_per_period
-    if not omega > 0.0 or not np.isfinite(omega):   # no period to divide: Settings.h
-        return cfg.h_free
-    if kind == SQUARE_VELOCITY:
-        return (np.pi / omega) / n
-    if kind != NONE:
-        return (2.0 * np.pi / omega) / n
-    return cfg.h_free

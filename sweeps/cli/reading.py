@@ -189,7 +189,8 @@ def _print_error_estimate(ds) -> None:
 
 
 def _warn_accuracy(ds) -> None:
-    """One stderr line per accuracy warning recorded in the cube (sweeps.estimates.error_estimate)."""
+    """One stderr line per accuracy warning recorded in the cube
+    (sweeps.estimates.error_estimate)."""
     from store.attrs import accuracy_warnings
 
     for w in accuracy_warnings(ds.attrs):

@@ -89,18 +89,18 @@ def sample(plan: Plan) -> tuple[np.ndarray, np.ndarray]:
     return index, plan.points_at(index)
 
 
-def compare(plan: Plan, cube, index: np.ndarray, finer: dict, label: str) -> dict:
+def compare(plan: Plan, cube, index: np.ndarray, finer, label: str) -> dict:
     """The observed change between the cube's values and the finer re-run, per output,
     against the promise of the sweep's level; warnings where a change exceeds it."""
     level = plan.numerics.label if plan.numerics.label in FINER else "standard"
     level = "standard" if level == "explicit" else level
     status = cube["status"].values.reshape(-1)[index]
-    ok = (status == S.OK) & (np.asarray(finer["status"]) == S.OK)
+    ok = (status == S.OK) & (finer.status == S.OK)
     change, promised, warnings = {}, {}, []
     for name in plan.outputs:
         values = cube[name].values
         coarse = values.reshape((-1,) + values.shape[4:])[index][ok]
-        fine = np.asarray(finer[name])[ok]
+        fine = finer.outputs[name][ok]
         if coarse.size == 0:
             continue
         diff = np.abs(coarse - fine)

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from engine import status as S
+from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
@@ -42,17 +43,15 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
 
 class SampleRuns:
     """The error sample's re-runs one accuracy level finer, one task per point
-    (sweeps.estimates.error_estimate), costliest first, submitted one by one: a refined sweep hands them
+    (error_estimate.py), costliest first, submitted one by one: a refined sweep hands them
     to the dispatch as filler for the workers idling at the tail of each level (its
-    sample is known before its first level ends: sweeps.estimates.error_estimate.sample)."""
+    sample is known before its first level ends: error_estimate.sample)."""
 
     def __init__(self, plan: Plan):
-        from ..planning.plan import point_costs
-
         self.plan, self.finer = plan, errest.finer_numerics(plan)
         self.index, self.points = errest.sample(plan)
         self.scene = plan.scene.with_(integrator=self.finer.integrator)
-        cost = point_costs(plan.spec, plan.coords)[self.index]
+        cost = plan.costs[self.index]
         self.order = np.argsort(-cost, kind="stable")
         self.futures: dict[int, object] = {}
 
@@ -66,12 +65,12 @@ class SampleRuns:
         i = int(self.order[len(self.futures)])
         self.futures[i] = client.submit(task.compute_block, self.scene,
                                         self.points[i:i + 1], self.plan.params,
-                                        self.finer.settings, pure=False)
+                                        self.finer.settings, self.index[i:i + 1], pure=False)
         return True
 
-    def gather(self, client, tick=None) -> list[dict]:
-        """Every re-run's result, in sample order (the rest submitted now); ``tick()``
-        once per re-run as it finishes."""
+    def gather(self, client, tick=None) -> BlockRecord:
+        """Every re-run's result, in sample order, as one record (the rest submitted
+        now); ``tick()`` once per re-run as it finishes."""
         from distributed import as_completed
 
         while self.submit_next(client):
@@ -80,7 +79,7 @@ class SampleRuns:
         for _ in as_completed(futures, loop=client.loop):
             if tick is not None:
                 tick()
-        return client.gather(futures)
+        return BlockRecord.concatenate(client.gather(futures))
 
     def cancel(self, client) -> None:
         client.cancel(list(self.futures.values()))
@@ -93,12 +92,10 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
     if display is None:
-        parts = runs.gather(client)
+        result = runs.gather(client)
     else:
         with display("error estimate", len(runs.order), "re-run") as bar:
-            parts = runs.gather(client, tick=bar.update)
-    result = {k: np.concatenate([part[k] for part in parts]) for k in parts[0]
-              if k not in task.META}
+            result = runs.gather(client, tick=bar.update)
     return errest.compare(plan, cube, index, result, finer.label)
 
 

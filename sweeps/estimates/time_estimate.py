@@ -15,7 +15,6 @@ import numpy as np
 
 from engine import params as P
 
-from ..spec import grid
 from ..planning.plan import Plan, make_plan
 from ..spec.models import LEVELS, Spec
 from ..workers.task import compute_block, warm_up
@@ -33,9 +32,9 @@ class Estimate:
     wall_s: float
 
 
-def sample_points(spec: Spec) -> np.ndarray:
+def sample_points(plan: Plan) -> np.ndarray:
     """Up to MAX_SAMPLES grid points: the extreme corners and the centre of the grid."""
-    pts = grid.points(spec)
+    pts = plan.points
     n = len(pts)
     picks = {0, n - 1, n // 2}
     # the point with the largest omega*W tends to cost most (most switches, largest |u|)
@@ -60,9 +59,9 @@ def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:
     """Estimated wall time of ``spec`` at accuracy ``level`` on ``workers`` cores."""
     plan = make_plan(spec, level)
     warm_up(plan.scene, plan.params, plan.numerics.settings)
-    pts = sample_points(spec)
+    pts = sample_points(plan)
     if plan.path != "simulate":
-        pts = grid.points(spec)[: min(plan.n_points, 4096)]
+        pts = plan.points[: min(plan.n_points, 4096)]
         workers = 1  # the analysis paths run in the submitting process
     per_point = _time_block(plan, pts)
     n_tasks = len(plan.blocks)

@@ -17,8 +17,8 @@ import numpy as np
 from engine import params as P
 from engine.scene import Scene
 
-from ..spec import grid
 from ..spec.accuracy import Numerics, numerics
+from ..spec.grid import GridFacts, base_params
 from ..spec.methods import resolve_outputs
 from ..spec.models import Spec
 
@@ -55,15 +55,21 @@ class Plan:
     params: np.ndarray
     numerics: Numerics
     outputs: tuple[str, ...]
-    coords: dict[str, np.ndarray]
+    grid: GridFacts = field(repr=False)      # the spec's grid, resolved once
+    costs: np.ndarray = field(repr=False)    # relative cost per point (point_costs)
     blocks: list[np.ndarray] = field(repr=False)
     refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
     block_s: float = 0.0   # estimated seconds of one block (simulated sweeps; 0: unknown)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
+    def coords(self) -> dict[str, np.ndarray]:
+        """The values of each axis, in the cube's axis order."""
+        return self.grid.coords
+
+    @property
     def shape(self) -> tuple[int, ...]:
-        return tuple(len(v) for v in self.coords.values())
+        return self.grid.shape
 
     @property
     def n_points(self) -> int:
@@ -81,8 +87,9 @@ class Plan:
 
     @property
     def points(self) -> np.ndarray:
-        """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built on each call."""
-        return grid.points(self.spec)
+        """Every grid point, ``(n, 4)`` (columns W, omega, v_ref, vd), built once and kept
+        with the spec (the run itself uses :meth:`points_at`)."""
+        return self.grid.points
 
     def points_at(self, index: np.ndarray) -> np.ndarray:
         """The ``(k, 4)`` grid points at flat indices ``index``, from the axes (the whole
@@ -96,9 +103,8 @@ class Plan:
 
 
 def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
-    dither = spec.dither
-    if spec.method == "simulate" and np.all(grid.axis_values(spec, "W") == 0.0):
-        dither = "none"  # no dither anywhere: no switches to step onto, no dither term
+    # the simulate path compiles the dither in effect (none when W = 0 everywhere)
+    dither = spec.grid_facts.dither if spec.method == "simulate" else spec.dither
     return Scene.from_params(p, system=spec.system, friction=spec.friction, dither=dither,
                              path=spec.method, integrator=integrator, outputs=outputs)
 
@@ -138,28 +144,29 @@ def point_costs(spec: Spec, coords: dict[str, np.ndarray]) -> np.ndarray:
 
 def make_plan(spec: Spec, level: str | None = None) -> Plan:
     """Plan ``spec`` (at its own accuracy, or at ``level`` for estimates)."""
-    p = grid.base_params(spec)
+    p = base_params(spec)
     num = numerics(spec, float(p[P.SIGMA0]), level)
     outputs = resolve_outputs(spec.method, spec.outputs)
-    coords = grid.coords(spec)
-    n = math.prod(len(v) for v in coords.values())
+    g = spec.grid_facts
+    costs = point_costs(spec, g.coords)
+    n = math.prod(g.shape)
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
     seconds = 0.0
     if spec.method == "simulate":
-        seconds = point_costs(spec, coords).sum() * spec.time.t_end * SECONDS_PER_RADIAN
+        seconds = costs.sum() * spec.time.t_end * SECONDS_PER_RADIAN
         if not spec.block_size:
             n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
-        blocks = balanced_blocks(point_costs(spec, coords), n_blocks)
+        blocks = balanced_blocks(costs, n_blocks)
     else:
         blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, coords=coords, blocks=blocks,
+                outputs=outputs, grid=g, costs=costs, blocks=blocks,
                 block_s=seconds / n_blocks)
 
 

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..spec.grid import AXES
+from ..spec.models import AXES
 from ..spec.methods import CLASS_OUTPUT, PLANES  # noqa: F401  (CLASS_OUTPUT: re-exported)
 from .lattice import lattice, split
 

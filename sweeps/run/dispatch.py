@@ -110,7 +110,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                                  [np.concatenate([plan.block_points(b) for b in group])
                                   for group in groups],
                                  [plan.params] * n, [plan.numerics.settings] * n,
-                                 pure=False, workers=allowed)
+                                 [np.concatenate([plan.blocks[b] for b in group])
+                                  for group in groups], pure=False, workers=allowed)
             inflight.update((f, (group, frozenset(allowed))) for f, group in zip(futures, groups))
             done.update(futures)
         while filler is not None and good and not queue and \
@@ -137,22 +138,16 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 group = inflight.pop(f)[0]
                 result = f.result() if f.status == "error" else result   # an error raises
                 finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
-                cost[0] += float(np.sum(result["cost_s"]))
+                cost[0] += float(np.sum(result.cost_s))
                 cost[1] += len(group)
         sink.many(finished)   # journaled as one group
         bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
 
 
-def split_result(result: dict, group: list[int], sizes: list[int]) -> list[tuple[int, dict]]:
-    """One task's result (the points of the blocks ``group``, ``sizes`` points each, one
-    after another) as ``(block, result)`` per block: per-point arrays cut, the rest
-    (fingerprint, error) repeated."""
-    if len(group) == 1:
-        return [(group[0], result)]
-    ends = np.cumsum(sizes)[:-1]
-    parts = {k: np.split(v, ends) for k, v in result.items() if k not in task.META}
-    meta = {k: v for k, v in result.items() if k in task.META}
-    return [(b, {**{k: v[i] for k, v in parts.items()}, **meta}) for i, b in enumerate(group)]
+def split_result(record, group: list[int], sizes: list[int]) -> list[tuple[int, object]]:
+    """One task's record (the points of the blocks ``group``, ``sizes`` points each, one
+    after another) as ``(block, record)`` per block."""
+    return list(zip(group, record.split(sizes))) if len(group) > 1 else [(group[0], record)]
 
 
 def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
@@ -176,7 +171,7 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler,
         if sink.should_stop():
             break
         sink(b, task.compute_block(plan.scene, plan.block_points(b), plan.params,
-                              plan.numerics.settings))
+                                   plan.numerics.settings, plan.blocks[b]))
         bar.update(len(plan.blocks[b]))
     timings["compute_s"] = time.perf_counter() - t
     bar.close()

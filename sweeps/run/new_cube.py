@@ -9,6 +9,7 @@ import store
 from engine import params as P
 
 from ..spec.methods import output_attrs
+from ..spec.models import AXIS_PARAM
 from ..planning.plan import Plan
 from ..version import __version__, results_fingerprint
 
@@ -29,13 +30,10 @@ def cube_attrs(plan: Plan) -> dict:
         "engine_scene": {k: (list(v) if isinstance(v, tuple) else v)
                          for k, v in vars(plan.scene).items()},
         "engine_params": {k: v for k, v in P.unpack(plan.params).items()
-                          if k not in AXIS_PARAMS},   # the axes are the cube's coordinates
+                          if k not in AXIS_PARAM.values()},   # the axes are the coordinates
         "Conventions": "CF-1.8",
         **software_versions(),
     }
-
-
-AXIS_PARAMS = ("W", "omega", "v_ref", "vd")
 
 
 def software_versions() -> dict[str, str]:

@@ -1,5 +1,5 @@
-"""Running a refined sweep (``refine = true``; sweeps.planning.refine): level after level through the
-same blocks, journal, lease and dask dispatch as an exhaustive sweep.
+"""Running a refined sweep (``refine = true``; sweeps.planning.refine): level after level
+through the same blocks, journal, lease and dask dispatch as an exhaustive sweep.
 
 A refined plan starts with no blocks. :func:`replay` rebuilds the refinement from what the
 cube (rebuilt from the journal) already holds: level by level it asks for the next points,
@@ -23,7 +23,7 @@ from engine import status as S
 from ..workers.cluster import dask_client
 from . import phases
 from .dispatch import run_blocks, run_blocks_local
-from ..planning.plan import Plan, balanced_blocks, point_costs
+from ..planning.plan import Plan, balanced_blocks
 from ..planning.refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
 from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
 
@@ -63,7 +63,7 @@ def _cut(plan: Plan, index: np.ndarray) -> list[np.ndarray]:
     """A level's points in blocks of balanced estimated cost (sweeps.planning.plan), at least two
     (both workers busy)."""
     n_blocks = max(math.ceil(index.size / BLOCK_POINTS[plan.path]), min(index.size, 2))
-    cost = point_costs(plan.spec, plan.coords)[index]
+    cost = plan.costs[index]
     return [index[b] for b in balanced_blocks(cost, n_blocks)]
 
 

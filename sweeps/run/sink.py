@@ -10,11 +10,11 @@ import numpy as np
 
 import store
 from engine import status as S
+from store.record import BlockRecord
 
 from .lease_holder import LEASE_LOST
 from ..planning.plan import Plan
 from ..version import results_fingerprint
-from ..workers.task import META
 
 PUBLISH_EVERY_S = 5.0     # republish the cube at most this often while running ...
 PUBLISH_SHARE = 0.03      # ... and spend at most this share of the run's time on it: the
@@ -39,22 +39,22 @@ class BlockSink:
         self.blocks_run = 0
         self.fingerprint = results_fingerprint()     # what every journaled block must carry
         self.foreign_blocks = 0                      # blocks refused for another engine
-        self.stopped: str | None = None              # sweeps.run.lease_holder.CANCELLED / SHUTDOWN / ...
+        self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
         self._report(force=True)
 
-    def __call__(self, b: int, result: dict) -> None:
-        self.many([(b, result)])
+    def __call__(self, b: int, record: BlockRecord) -> None:
+        self.many([(b, record)])
 
-    def many(self, items: list[tuple[int, dict]]) -> None:
-        """Finished blocks ``(b, result)``, as many as the dispatch found ready: journaled
+    def many(self, items: list[tuple[int, BlockRecord]]) -> None:
+        """Finished blocks ``(b, record)``, as many as the dispatch found ready: journaled
         as one group file (one fsync for them all: store.journal_groups; a file per block
         cost 2.8 ms of CPU and two fsyncs a block, scripts/bench_scale.py), then into the
         cube, then one progress report and at most one publish."""
-        ours = [(b, self._payload(b, r)) for b, r in items if self._ours(b, r)]
+        ours = [(b, r) for b, r in items if self._ours(b, r)]
         if ours:
-            self.journal.write_group(ours, engine=self.fingerprint)
-        for b, payload in ours:
-            store.fill_block(self.cube, payload)
+            self.journal.write_group(ours)
+        for b, record in ours:
+            store.fill(self.cube, record)
             self.done.add(b)
         self.blocks_run += len(ours)
         since = time.monotonic() - self.last_publish
@@ -66,22 +66,18 @@ class BlockSink:
             self.publish_s = self.last_publish - t
         self._report()
 
-    def _ours(self, b: int, result: dict) -> bool:
-        """The block's engine is this sweep's: the last line of defence (sweeps.workers.matching)."""
-        engine = result.get("fingerprint")
-        if engine != self.fingerprint:
+    def _ours(self, b: int, record: BlockRecord) -> bool:
+        """The block's engine is this sweep's: the last line of defence
+        (sweeps.workers.matching)."""
+        if record.fingerprint != self.fingerprint:
             self.foreign_blocks += 1
             log.warning("block %d came back from another engine (results fingerprint %s, "
                         "this sweep's %s): not journaled; its points stay to compute",
-                        b, engine, self.fingerprint)
+                        b, record.fingerprint, self.fingerprint)
             return False
-        if "error" in result:
-            log.warning("block %d failed: %s", b, result["error"])
+        if record.error:
+            log.warning("block %d failed: %s", b, record.error)
         return True
-
-    def _payload(self, b: int, result: dict) -> dict:
-        return {"index": self.plan.blocks[b],
-                **{k: v for k, v in result.items() if k not in META}}
 
     def _report(self, force: bool = False, **extra) -> None:
         if force or self.lease.due():

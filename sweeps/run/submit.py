@@ -9,11 +9,11 @@ rename), so a submitter killed at any instant loses at most the blocks in flight
 cube is republished every few blocks and at the end. A resubmitted spec computes only
 the blocks missing from the journal.
 
-The pieces: the worker's task (sweeps.workers.task), the cluster (sweeps.workers.cluster), the empty cube
-of a plan (sweeps.run.new_cube), the sink of finished blocks (sweeps.run.sink), their dispatch
-(sweeps.run.dispatch), the error estimate (sweeps.estimates.error_reruns) and how a run ends
-(sweeps.run.outcome). This module holds :func:`submit`, which puts them together under the
-sweep's lease.
+The pieces: the worker's task (sweeps.workers.task), the cluster (sweeps.workers.cluster),
+the empty cube of a plan (sweeps.run.new_cube), the sink of finished blocks
+(sweeps.run.sink), their dispatch (sweeps.run.dispatch), the error estimate
+(sweeps.estimates.error_reruns) and how a run ends (sweeps.run.outcome). This module holds
+:func:`submit`, which puts them together under the sweep's lease.
 """
 from __future__ import annotations
 

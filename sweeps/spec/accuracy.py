@@ -16,11 +16,12 @@ Choice of integrator (:func:`numerics`):
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from engine.settings import Settings
 
+from .grid import system_defaults
+from .methods import resolve_outputs
 from .models import ExplicitAccuracy, Spec
 
 # error each level promises in the queried outputs (relative; absolute for time fractions)
@@ -115,8 +116,6 @@ def promise(level: str, output: str, friction: str | None = None) -> float:
 
 def needs_phase_accuracy(spec: Spec) -> bool:
     """True when the spec asks for a share that hinges on the sliding gap (PHASE_LEVELS)."""
-    from .methods import resolve_outputs
-
     return (spec.method == "simulate" and spec.friction == "elastoplastic"
             and any(o in PHASE_OUTPUTS for o in resolve_outputs(spec.method, spec.outputs)))
 
@@ -154,34 +153,18 @@ def default_integrator(sigma0: float) -> str:
     return "dopri5"
 
 
-def _grid_extremes(spec: Spec) -> tuple[str, float, float, float]:
-    """(effective dither, max W, max |v_ref|, min omega) of the spec's grid."""
-    from . import grid
-
-    W = grid.axis_values(spec, "W")
-    dither = "none" if spec.dither == "none" or not W.any() else spec.dither
-    v_ref = grid.axis_values(spec, "v_ref")
-    omega = grid.axis_values(spec, "omega")
-    return dither, float(abs(W).max()), float(abs(v_ref).max()), float(omega.min())
-
-
 def rk4_fits(spec: Spec, sigma0: float, level: str) -> bool:
     """True when RK4 at ``level`` is the calibrated choice for ``spec`` (module docstring)."""
-    dither, W_max, v_max, omega_min = _grid_extremes(spec)
-    if level not in RK4_WHERE.get(dither, ()) or spec.method != "simulate":
+    g = spec.grid_facts
+    if level not in RK4_WHERE.get(g.dither, ()) or spec.method != "simulate":
         return False
     if needs_phase_accuracy(spec) or spec.friction in STATIC_LAWS:
         return False                 # RK4 lands neither on alpha's kinks nor on the band
-    if dither == "none":
-        h = FIXED_H[level]
-    elif omega_min > 0:
-        h = math.pi / omega_min / FIXED_STEPS[level]
-    else:
+    if g.dither != "none" and not g.omega_min > 0:
         return False
-    from . import grid
-
-    fc = spec.params.fc or grid.system_defaults(spec.system)["fc"]
-    return h * sigma0 * (2.0 * v_max + W_max) / fc <= RK4_MAX_H_LAMBDA
+    h = g.largest_step(FIXED_STEPS[level], FIXED_H[level])
+    fc = spec.params.fc or system_defaults(spec.system)["fc"]
+    return h * sigma0 * (2.0 * g.v_max + g.W_max) / fc <= RK4_MAX_H_LAMBDA
 
 
 def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
@@ -212,8 +195,6 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
 def _static_tol(spec: Spec, tol: dict) -> dict:
     """``tol`` tightened until the step's velocity error fits well inside the Karnopp band
     (``STATIC_RTOL_PER_BAND``); atol keeps the levels' ratio 1e-3 to rtol."""
-    from . import grid
-
-    band = spec.params.stick_band or grid.system_defaults(spec.system)["stick_band"]
+    band = spec.params.stick_band or system_defaults(spec.system)["stick_band"]
     rtol = min(tol["rtol"], STATIC_RTOL_PER_BAND * band)
     return {"rtol": rtol, "atol": min(tol["atol"], 1e-3 * rtol)}

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import axis_values, system_defaults
+from .grid import system_defaults
 from .methods import CLASS_OUTPUT, PLANES, allowed_outputs, resolve_outputs
 from .messages import show
 from .models import AXES, Range, Spec
@@ -70,7 +70,7 @@ def check_grid(spec: Spec) -> list[str]:
         raw = getattr(spec.grid, axis)
         if raw is None:
             continue   # a default value (the averaged path's omega is inf by design)
-        values = axis_values(spec, axis)
+        values = spec.grid_facts.coords[axis]
         bad = values[~np.isfinite(values)]
         if bad.size:
             why = " (the range's span overflows)" if isinstance(raw, Range) else ""

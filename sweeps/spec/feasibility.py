@@ -64,8 +64,10 @@ import math
 
 from engine import params as P
 
+from .accuracy import numerics
+from .fixed_step import dither_periods, stability_faults
+from .grid import GridFacts, base_params
 from .models import ExplicitAccuracy, is_adaptive
-from .fixed_step import Grid, dither_periods, grid_summary, stability_faults
 
 # an adaptive method takes about this many steps per sine period at least (DP5, Sec. 7
 # scene, W = 0.1-3, omega = 1e3-3e4: 4.5-16 at draft, 15-53 at standard): past the budget
@@ -75,7 +77,7 @@ WARN_STEPS_PER_PERIOD = 4
 
 # --- options the integrator ignores ---------------------------------------------------
 
-def option_faults(spec, g: Grid) -> list[str]:
+def option_faults(spec, g: GridFacts) -> list[str]:
     """rk4's ``steps_per_period`` without dither, ``step`` with dither (module docstring, 1)."""
     acc = spec.accuracy
     if not isinstance(acc, ExplicitAccuracy) or is_adaptive(acc.integrator):
@@ -93,8 +95,9 @@ def option_faults(spec, g: Grid) -> list[str]:
 
 # --- the step budget ------------------------------------------------------------------
 
-def budget_faults(spec, g: Grid, numerics) -> tuple[list[str], list[str]]:
-    """(refusals, warnings) of the step budget (module docstring, 3)."""
+def budget_faults(spec, g: GridFacts, p, numerics) -> tuple[list[str], list[str]]:
+    """(refusals, warnings) of the step budget (module docstring, 3); ``p`` the spec's
+    parameter vector."""
     s, name, t_end = numerics.settings, numerics.integrator, spec.time.t_end
     fixed = not is_adaptive(name)
     budget = s.max_steps
@@ -130,7 +133,6 @@ def budget_faults(spec, g: Grid, numerics) -> tuple[list[str], list[str]]:
                         f"{t_end / s.h:.3g} steps per point, over the engine's budget of "
                         f"{budget:.3g}; shorten t_end, or use a larger step or an adaptive "
                         "integrator")
-    p = g.p
     if spec.system == "slider" and p[P.SLOW_A] != 0.0 and p[P.SLOW_OMEGA] > 0.0:
         slow = p[P.SLOW_OMEGA] * t_end / (2.0 * math.pi)
         if slow > budget:
@@ -145,15 +147,13 @@ def budget_faults(spec, g: Grid, numerics) -> tuple[list[str], list[str]]:
 
 def check(spec) -> tuple[list[str], list[str]]:
     """(refusals, warnings) for a well-typed spec whose grid is within the point budget."""
-    from .accuracy import numerics
-
     if spec.method != "simulate":
         return [], []
-    g = grid_summary(spec)
+    g, p = spec.grid_facts, base_params(spec)
     problems = option_faults(spec, g)
     if problems:
         return problems, []
-    num = numerics(spec, float(g.p[P.SIGMA0]))
-    problems = stability_faults(spec, g, num)
-    found, notes = budget_faults(spec, g, num)
+    num = numerics(spec, float(p[P.SIGMA0]))
+    problems = stability_faults(spec, g, p, num)
+    found, notes = budget_faults(spec, g, p, num)
     return problems + found, notes

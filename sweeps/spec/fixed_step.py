@@ -1,76 +1,23 @@
-"""The stability of an explicit fixed step (check 2 of :mod:`sweeps.spec.feasibility`): the
-stability region of a Runge-Kutta method from its Butcher tableau (:func:`reach`), the
-scene's eigenvalue estimates over the grid (:func:`rates`), and the few facts of the grid
-every feasibility check needs (:class:`Grid`: extremes, the effective dither, parameters;
-:func:`dither_periods`). The equations and the measurements behind them are in the docstring of
-:mod:`sweeps.spec.feasibility`.
+"""Whether an explicit fixed step is stable on the scene (check 2 of
+:mod:`sweeps.spec.feasibility`): the scene's eigenvalue estimates over the grid
+(:func:`rates`) against the method's stability region (engine.integrators.stability_region),
+at the largest step the grid gives (:meth:`sweeps.spec.grid.GridFacts.largest_step`); and
+the dither (half-)periods a point must step through (:func:`dither_periods`). The equations
+and the measurements behind them are in the docstring of :mod:`sweeps.spec.feasibility`.
 """
 from __future__ import annotations
 
 import cmath
 import math
 from dataclasses import dataclass
-from functools import lru_cache
-
-import numpy as np
 
 from engine import params as P
 
-from . import grid
+from .grid import GridFacts
 from .models import ExplicitAccuracy, is_adaptive
 
 SINES = ("sine-velocity", "sine-force")
 BRISTLE_LAWS = ("lugre", "elastoplastic")
-
-
-# --- the stability region of a fixed-step method -----------------------------------------
-
-def stability_polynomial(tableau) -> np.ndarray:
-    """Coefficients (lowest power first) of ``R(z) = 1 + z b^T (I - z A)^-1 1`` of an
-    explicit Runge-Kutta tableau: ``R(z) = sum_k z^k b^T A^(k-1) 1`` (a polynomial, A being
-    nilpotent). RK4: 1, 1, 1/2, 1/6, 1/24."""
-    a = np.asarray(tableau.a, dtype=float)
-    b = np.asarray(tableau.b, dtype=float)
-    coeffs, v = [1.0], np.ones(len(b))
-    for _ in range(len(b)):
-        coeffs.append(float(b @ v))
-        v = a @ v
-    return np.array(coeffs)
-
-
-def _direction(z: complex) -> float:
-    """The angle of ``z``, snapped onto the real and imaginary axes (where RK4's region
-    has its boundary on the axis itself, so a rounding error must not leave it)."""
-    if abs(z.imag) <= 1e-9 * abs(z):
-        return math.pi if z.real < 0 else 0.0
-    if abs(z.real) <= 1e-9 * abs(z):
-        return math.pi / 2
-    return cmath.phase(complex(z.real, abs(z.imag)))   # the region is symmetric in Im
-
-
-@lru_cache(maxsize=256)
-def reach(integrator: str, angle: float) -> float:
-    """How far the stability region of ``integrator`` reaches from 0 along the ray
-    ``t e^{i angle}``: the first ``t`` with ``|R| > 1`` (HW II, Sec. IV.2). RK4: 2.785 at
-    ``angle = pi`` (negative real axis), ``2 sqrt 2 = 2.828`` at ``pi / 2`` (imaginary
-    axis)."""
-    from engine.integrators import METHODS
-
-    poly = stability_polynomial(METHODS[integrator].TABLEAU)
-    ray = cmath.exp(1j * angle)
-
-    def inside(t):
-        return np.abs(np.polynomial.polynomial.polyval(t * ray, poly)) <= 1.0 + 1e-9
-
-    t = np.linspace(0.0, 20.0, 20_001)[1:]
-    out = np.flatnonzero(~inside(t))
-    if out.size == 0:
-        return math.inf
-    lo, hi = (t[out[0] - 1] if out[0] else 0.0), t[out[0]]
-    for _ in range(50):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if inside(mid) else (lo, mid)
-    return float(lo)
 
 
 # --- the scene's rates --------------------------------------------------------------------
@@ -85,31 +32,9 @@ class Rate:
     per_step: bool = False
 
 
-@dataclass(frozen=True)
-class Grid:
-    """What the checks need of the grid: extremes, the effective dither, parameters."""
-
-    dither: str          # "none" when the spec has no dither or W = 0 everywhere
-    W_max: float
-    v_max: float
-    omega_min: float
-    omega_max: float
-    p: np.ndarray
-
-
-def grid_summary(spec) -> Grid:
-    """The :class:`Grid` of ``spec`` (its axes are built: call after the point budget)."""
-    W = grid.axis_values(spec, "W")
-    omega = grid.axis_values(spec, "omega")
-    v_ref = grid.axis_values(spec, "v_ref")
-    dither = spec.dither if spec.dither != "none" and W.any() else "none"
-    return Grid(dither, float(np.abs(W).max()), float(np.abs(v_ref).max()),
-                float(omega.min()), float(omega.max()), grid.base_params(spec))
-
-
-def rates(spec, g: Grid) -> list[Rate]:
-    """The scene's eigenvalue estimates (module docstring, 2)."""
-    p = g.p
+def rates(spec, g: GridFacts, p) -> list[Rate]:
+    """The scene's eigenvalue estimates (sweeps.spec.feasibility docstring, 2); ``p`` the
+    spec's parameter vector (sweeps.spec.grid.base_params)."""
     out = []
     slider = spec.system == "slider"
     slow_a, slow_omega = abs(p[P.SLOW_A]), p[P.SLOW_OMEGA]
@@ -134,38 +59,29 @@ def rates(spec, g: Grid) -> list[Rate]:
     return out
 
 
-def _step(g: Grid, settings) -> float:
-    """The largest fixed step of the grid (at the smallest omega), as the driver sets it."""
-    n = settings.steps_per_period
-    if g.dither == "square-velocity":
-        return math.pi / g.omega_min / n
-    if g.dither in SINES:
-        return 2.0 * math.pi / g.omega_min / n
-    return settings.h
-
-
-def stability_faults(spec, g: Grid, numerics) -> list[str]:
+def stability_faults(spec, g: GridFacts, p, numerics) -> list[str]:
     """One line when the explicit fixed step is outside its method's stability region."""
     acc = spec.accuracy
     if not isinstance(acc, ExplicitAccuracy) or is_adaptive(numerics.integrator):
         return []
     from engine.integrators import METHODS
+    from engine.integrators.stability_region import direction, reach
 
     if METHODS[numerics.integrator].TABLEAU is None:   # no tableau, no known region
         return []
     s, name = numerics.settings, numerics.integrator
-    h = _step(g, s)
+    h = g.largest_step(s.steps_per_period, s.h)
     worst, ratio, zbest = None, 0.0, 0j
-    for rate in rates(spec, g):
+    for rate in rates(spec, g, p):
         z = (2j * math.pi / s.steps_per_period) if rate.per_step else h * rate.lam
         if z == 0:
             continue
-        r = abs(z) / reach(name, _direction(z))
+        r = abs(z) / reach(name, direction(z))
         if r > ratio:
             worst, ratio, zbest = rate, r, z
     if worst is None or ratio <= 1.0:
         return []
-    bound = reach(name, _direction(zbest))
+    bound = reach(name, direction(zbest))
     axis = ("real axis" if abs(zbest.imag) < 1e-12 * abs(zbest) else
             "imaginary axis" if abs(zbest.real) < 1e-12 * abs(zbest) else "that direction")
     where = "" if worst.per_step or g.dither == "none" else f" at omega = {g.omega_min:g}"
@@ -191,7 +107,7 @@ def _floor3(x: float) -> float:
     return math.floor(x / scale) * scale
 
 
-def dither_periods(g: Grid, t_end: float) -> float:
+def dither_periods(g: GridFacts, t_end: float) -> float:
     """Dither (half-)periods of the grid's fastest point: square-wave switches, or sine
     periods; 0 without dither."""
     if g.dither == "square-velocity":

@@ -1,22 +1,23 @@
-"""Grid axes: expansion of lists and ranges, defaults, and point enumeration.
+"""Grid axes: expansion of lists and ranges, defaults, the spec's parameter vector, and
+the grid's facts, resolved once per spec (:class:`GridFacts`, ``Spec.grid_facts``).
 
 Points are enumerated in C order over ``AXES = (W, omega, v_ref, v_d)``, the order of
 the cube's dimensions, so a point's flat index is its position in the cube.
 
-:func:`axis_size` and :func:`shape` read the sizes from the spec's fields without
-building any axis, so the point budget is checked in O(1) memory whatever ``num`` is
-(sweeps.spec.parse_spec); axes are built only after that check.
+:func:`axis_size` reads a size from the spec's fields without building any axis, so the
+point budget is checked in O(1) memory whatever ``num`` is (sweeps.spec.load); axes are
+built only after that check, once (``spec.grid_facts``), and the plan carries them.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from engine import params as P
 
-from .models import AXES, Range, Spec
-
-# the engine parameter each cube axis overrides
-AXIS_PARAM = {"W": "W", "omega": "omega", "v_ref": "v_ref", "v_d": "vd"}
+from .models import AXES, AXIS_PARAM, Range, Spec
 
 
 def system_defaults(system: str) -> dict:
@@ -67,15 +68,52 @@ def axis_values(spec: Spec, axis: str) -> np.ndarray:
     return np.asarray(raw, dtype=float)
 
 
-def coords(spec: Spec) -> dict[str, np.ndarray]:
-    return {axis: axis_values(spec, axis) for axis in AXES}
+@dataclass(frozen=True)
+class GridFacts:
+    """What the grid of a spec is, worked out once (``Spec.grid_facts``) and carried on the
+    plan: the coordinates of each axis, the points, the extremes the spec-time checks need,
+    and the dither in effect."""
 
+    coords: dict[str, np.ndarray]   # axis -> values (float64), in AXES order
+    dither: str                     # "none" when the spec has none or W = 0 everywhere
 
-def shape(spec: Spec) -> tuple[int, ...]:
-    return tuple(axis_size(spec, axis) for axis in AXES)
+    @classmethod
+    def of(cls, spec: Spec) -> GridFacts:
+        coords = {axis: axis_values(spec, axis) for axis in AXES}
+        W = coords["W"]
+        # no dither anywhere: no switches to step onto, no dither term, no dither to resolve
+        dither = spec.dither if spec.dither != "none" and W.any() else "none"
+        return cls(coords, dither)
 
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.coords.values())
 
-def points(spec: Spec) -> np.ndarray:
-    """All grid points as an ``(n, 4)`` array with columns (W, omega, v_ref, v_d), C order."""
-    mesh = np.meshgrid(*coords(spec).values(), indexing="ij")
-    return np.stack([m.ravel() for m in mesh], axis=1)
+    @cached_property
+    def points(self) -> np.ndarray:
+        """All grid points, ``(n, 4)`` with columns (W, omega, v_ref, v_d), C order."""
+        mesh = np.meshgrid(*self.coords.values(), indexing="ij")
+        return np.stack([m.ravel() for m in mesh], axis=1)
+
+    @property
+    def W_max(self) -> float:
+        return float(np.abs(self.coords["W"]).max())
+
+    @property
+    def v_max(self) -> float:
+        return float(np.abs(self.coords["v_ref"]).max())
+
+    @property
+    def omega_min(self) -> float:
+        return float(self.coords["omega"].min())
+
+    @property
+    def omega_max(self) -> float:
+        return float(self.coords["omega"].max())
+
+    def largest_step(self, steps_per_period: int, h: float) -> float:
+        """The largest fixed step over the grid (at the smallest omega), as the engine's
+        driver sets it (:func:`engine.dither.fixed_step`)."""
+        from engine.dither import CODE, fixed_step
+
+        return float(fixed_step(CODE[self.dither], self.omega_min, steps_per_period, h))

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from functools import cached_property
 from typing import Annotated, Literal
 
 from pydantic import (
@@ -27,6 +28,9 @@ from pydantic import (
 )
 
 from .messages import show
+from engine.params import POINT_AXES
+from store.cube import AXES as CUBE_AXES
+
 from ..version import __version__
 
 SYSTEMS = ("slider", "contact")
@@ -34,7 +38,12 @@ FRICTIONS = ("coulomb", "stribeck", "lugre", "elastoplastic")
 DITHERS = ("none", "square-velocity", "sine-velocity", "sine-force")
 METHODS = ("simulate", "averaged", "hbm")
 LEVELS = ("draft", "standard", "reference")
-AXES = ("W", "omega", "v_ref", "v_d")
+# The four axes of every cube in its dimension order, and the engine parameter each one
+# sets: the one table of their two spellings (the cube and the spec say v_d, the parameter
+# vector vd), joined from the cube's axes (store.cube.AXES) and the columns of the engine's
+# points (engine.params.POINT_AXES). Grid below has a field for each.
+AXIS_PARAM = dict(zip(CUBE_AXES, POINT_AXES))
+AXES = tuple(AXIS_PARAM)
 COSMETIC = ("name", "description", "block_size")
 
 MAX_AXIS_POINTS = 10_000_000      # num of one range, and values of one list axis
@@ -75,7 +84,8 @@ Axis = Annotated[Annotated[list[float], Field(min_length=1, max_length=MAX_AXIS_
 
 
 class Grid(_Strict):
-    """The four axes of every cube; an omitted axis has the single system default."""
+    """The four axes of every cube (:data:`AXES`); an omitted axis has the single system
+    default."""
 
     W: Axis | None = None
     omega: Axis | None = None
@@ -251,6 +261,15 @@ class Spec(_Strict):
                            "engine_fingerprint": results_fingerprint()},
                           sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:12]
+
+    @cached_property
+    def grid_facts(self):
+        """The grid resolved once (:class:`sweeps.spec.grid.GridFacts`: coordinates, extremes,
+        the dither in effect), built on first use: only after the point budget is checked
+        (sweeps.spec.load). ``model_copy(update=...)`` would carry it over unchanged."""
+        from .grid import GridFacts
+
+        return GridFacts.of(self)
 
     def to_json(self) -> str:
         """Canonical JSON of the whole spec (cosmetic fields included), sorted keys."""

@@ -84,10 +84,8 @@ def compute(spec_dict: dict):
         raise RefusedError(str(exc)) from None
     cube = empty_cube(plan)
     for b, idx in enumerate(plan.blocks):
-        res = compute_block(plan.scene, plan.block_points(b), plan.params,
-                            plan.numerics.settings)
-        fill(cube, idx, {k: res[k] for k in plan.outputs}, res["status"], res["cost_s"],
-             res["steps"], res["evals"])
+        fill(cube, compute_block(plan.scene, plan.block_points(b), plan.params,
+                                 plan.numerics.settings, idx))
     return cube.to_dataset()
 
 

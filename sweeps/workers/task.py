@@ -1,7 +1,8 @@
 """The task a dask worker runs: one block of points through the engine.
 
 :func:`compute_block` never raises (a crash of the engine marks its block FAILED) and
-returns arrays only; workers never touch files (sweeps.run.submit). :func:`warm_up` compiles the
+returns the block's :class:`store.record.BlockRecord`, arrays only; workers never touch
+files (sweeps.run.submit). :func:`warm_up` compiles the
 block kernel once per worker. With ``$DITHERLAB_BLOCK_LOG`` set every computed block is
 noted in that file (:func:`block_key`), which is how the tests count block computations
 across processes.
@@ -16,21 +17,22 @@ import numpy as np
 
 from engine import params as P
 from engine import status as S
+from store.record import BlockRecord
 
 from .block_gate import GATE_ENV, pass_gate
-
-COUNTERS = ("status", "cost_s", "steps", "evals")
-META = ("error", "fingerprint")   # keys of a block's result that are not per-point arrays
 
 log = logging.getLogger("ditherlab")
 
 BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed block is noted in
 
 
-def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
+def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
+                  index: np.ndarray | None = None) -> BlockRecord:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
-    The result carries ``fingerprint``: the results fingerprint of the process that
-    computed it (the submitter journals a block only under its own: sweeps.sink).
+    ``index``: the points' flat cube indices, carried into the record (default: their
+    positions in ``points``). The record's ``fingerprint`` is the results fingerprint of
+    the process that computed it (the submitter journals a block only under its own:
+    sweeps.run.sink).
 
     With ``$DITHERLAB_BLOCK_LOG`` set (inherited by local dask workers), appends one line
     per call to that file: pid and :func:`block_key` (how the tests count block
@@ -42,17 +44,14 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings) -> dict:
         pass_gate(os.environ[GATE_ENV])
     if os.environ.get(BLOCK_LOG_ENV):
         _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))
+    index = np.arange(len(points)) if index is None else index
     try:
         res = run_block(scene, points, p, settings)
     except Exception as exc:  # noqa: BLE001 -- one bad block must not end the sweep
-        n = len(points)
-        nan = np.full(n, np.nan)
-        return {**{name: nan for name in scene.outputs},
-                "status": np.full(n, S.FAILED, np.int8), "cost_s": np.zeros(n),
-                "steps": np.zeros(n, np.int64), "evals": np.zeros(n, np.int64),
-                "error": f"{type(exc).__name__}: {exc}", "fingerprint": _fingerprint()}
-    return {**res.outputs, "status": res.status, "cost_s": res.cost_s,
-            "steps": res.steps, "evals": res.evals, "fingerprint": _fingerprint()}
+        return BlockRecord.failed(index, scene.outputs, f"{type(exc).__name__}: {exc}",
+                                  S.FAILED, fingerprint=_fingerprint())
+    return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs,
+                       fingerprint=_fingerprint())
 
 
 def identity() -> dict:

@@ -19,7 +19,7 @@ from store import PU, STABLE, SU
 from sweeps.run.new_cube import empty_cube
 from sweeps.planning.plan import make_plan
 from sweeps.spec import load_spec
-from sweeps.workers.task import META, compute_block
+from sweeps.workers.task import compute_block
 
 SPEC = Path(__file__).resolve().parents[2] / "specs" / "fig09.toml"
 V_C = 0.2986  # undithered threshold (DESIGN.md §1; test_analysis_stability.py computes it)
@@ -35,10 +35,8 @@ def fig09_cube():
     plan = make_plan(load_spec(data))
     cube = empty_cube(plan)
     for b in range(len(plan.blocks)):
-        result = compute_block(plan.scene, plan.block_points(b), plan.params,
-                               plan.numerics.settings)
-        store.fill_block(cube, {"index": plan.blocks[b],
-                                **{k: v for k, v in result.items() if k not in META}})
+        store.fill(cube, compute_block(plan.scene, plan.block_points(b), plan.params,
+                                       plan.numerics.settings, plan.blocks[b]))
     assert np.all(cube["status"].values == store.OK)
     return cube
 

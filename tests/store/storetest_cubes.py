@@ -29,21 +29,19 @@ def make_cube(coords=COORDS, outputs=OUTPUTS, attrs=ATTRS, **kw):
     return store.empty_cube(coords, outputs, attrs, **kw)
 
 
-def block_arrays(ds, index, seed=0):
-    """Deterministic results for the points ``index``: value = flat index + 0.25 etc."""
+def block_record(ds, at, seed=0, **change):
+    """A block's deterministic results for the points ``at`` (flat indices; value = flat
+    index + 0.25 etc.) as the runner hands them on (``store.BlockRecord``); ``change``
+    replaces fields (e.g. ``index=``: the record claims other points)."""
     rng = np.random.default_rng(seed)
-    n = len(index)
-    values = {
-        name: np.asarray(index, float) + 0.25 * k for k, name in enumerate(store.output_names(ds))
+    n = len(at)
+    outputs = {
+        name: np.asarray(at, float) + 0.25 * k for k, name in enumerate(store.output_names(ds))
     }
     status = rng.choice(np.array([0, 0, 0, 2, 3], np.int8), size=n)
-    return dict(
-        values=values,
-        status=status,
-        cost_s=rng.random(n),
-        steps=np.arange(n) * 7,
-        evals=np.arange(n) * 43,
-    )
+    fields = dict(index=at, status=status, cost_s=rng.random(n), steps=np.arange(n) * 7,
+                  evals=np.arange(n) * 43, outputs=outputs)
+    return store.BlockRecord(**{**fields, **change})
 
 
 U, S, X = 0.0, 1.0, np.nan  # unstable, stable, not computed (status 2)

@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 import xarray as xr
-from storetest_cubes import ATTRS, COORDS, OUTPUTS, block_arrays, make_cube
+from storetest_cubes import ATTRS, COORDS, OUTPUTS, block_record, make_cube
 
 import store
 from store import attrs as A
@@ -65,15 +65,15 @@ def test_axis_units_and_long_names_can_be_overridden():
 
 def test_roundtrip_is_identical(cube, tmp_path):
     index = np.array([0, 5, 17, len(store.grid_points(cube)) - 1])
-    store.fill(cube, index, **block_arrays(cube, index))
+    store.fill(cube, block_record(cube, index))
     path = store.publish(cube, tmp_path / "cube.nc")
     back = store.open_cube(path)
     xr.testing.assert_identical(store.as_dataset(cube), store.as_dataset(back))
     store.publish(back, path)  # republishing a reopened cube (with file encodings) is stable
     xr.testing.assert_identical(store.as_dataset(cube), store.as_dataset(store.open_cube(path)))
     more = np.array([1, 2])  # a reopened cube can be filled further (resume)
-    store.fill(back, more, **block_arrays(cube, more, seed=1))
-    store.fill(cube, more, **block_arrays(cube, more, seed=1))
+    store.fill(back, block_record(cube, more, seed=1))
+    store.fill(cube, block_record(cube, more, seed=1))
     xr.testing.assert_identical(store.as_dataset(cube), store.as_dataset(back))
 
 
@@ -81,33 +81,27 @@ def test_fill_uses_c_order_over_axes(cube):
     shape = tuple(len(COORDS[a]) for a in store.AXES)
     multi = (np.array([2, 0, 1]), np.array([3, 1, 0]), np.array([1, 0, 1]), np.array([0, 0, 0]))
     index = np.ravel_multi_index(multi, shape)
-    arrays = block_arrays(cube, index)
-    store.fill(cube, index, **arrays)
+    record = block_record(cube, index)
+    store.fill(cube, record)
     ds = cube.to_dataset()
     for k, point in enumerate(zip(*multi)):
         at = dict(zip(store.AXES, point))
-        assert ds["F_mean"].isel(at).item() == arrays["values"]["F_mean"][k]
-        assert ds["status"].isel(at).item() == arrays["status"][k]
-        assert ds["evals"].isel(at).item() == arrays["evals"][k]
+        assert ds["F_mean"].isel(at).item() == record.outputs["F_mean"][k]
+        assert ds["status"].isel(at).item() == record.status[k]
+        assert ds["evals"].isel(at).item() == record.evals[k]
     rows = store.grid_points(cube, index)
     expected = [[COORDS[a][i] for a, i in zip(store.AXES, point)] for point in zip(*multi)]
     np.testing.assert_array_equal(rows, expected)
     assert store.pending_index(cube).size == cube["status"].size - np.count_nonzero(
-        arrays["status"] == 0
+        record.status == 0
     )
 
 
 def test_status_counts(cube):
     index = np.arange(4)
-    store.fill(
-        cube,
-        index,
-        {n: np.zeros(4) for n in OUTPUTS},
-        np.array([0, 2, 3, 0]),
-        np.zeros(4),
-        np.zeros(4, int),
-        np.zeros(4, int),
-    )
+    store.fill(cube, store.BlockRecord(index, np.array([0, 2, 3, 0]), np.zeros(4),
+                                       np.zeros(4, int), np.zeros(4, int),
+                                       {n: np.zeros(4) for n in OUTPUTS}))
     assert store.status_counts(cube) == {
         "ok": 2,
         "not_yet_computed": cube["status"].size - 4,
@@ -119,9 +113,10 @@ def test_status_counts(cube):
 @pytest.mark.parametrize(
     "change, message",
     [
-        (dict(values={"F_mean": np.zeros(2)}), r"missing \['long_stick_fraction'\]"),
-        (dict(values={**{n: np.zeros(2) for n in OUTPUTS}, "x": np.zeros(2)}), r"unknown \['x'\]"),
-        (dict(cost_s=np.zeros(3)), r"cost_s has shape \(3,\), expected \(2,\)"),
+        (dict(outputs={"F_mean": np.zeros(2)}), r"missing \['long_stick_fraction'\]"),
+        (dict(outputs={**{n: np.zeros(2) for n in OUTPUTS}, "x": np.zeros(2)}), r"unknown \['x'\]"),
+        (dict(outputs={n: np.zeros((2, 3)) for n in OUTPUTS}),
+         r"has shape \(2, 3\), expected \(2,\)"),
         (dict(status=np.array([0, 7])), r"status codes must be in 0..3, got \[7\]"),
         (
             dict(index=np.array([0, 24])),
@@ -133,7 +128,7 @@ def test_status_counts(cube):
 def test_fill_refuses_bad_input_and_writes_nothing(cube, change, message):
     args = dict(
         index=np.array([0, 1]),
-        values={n: np.ones(2) for n in OUTPUTS},
+        outputs={n: np.ones(2) for n in OUTPUTS},
         status=np.zeros(2, np.int8),
         cost_s=np.ones(2),
         steps=np.ones(2, int),
@@ -142,7 +137,7 @@ def test_fill_refuses_bad_input_and_writes_nothing(cube, change, message):
     args.update(change)
     before = cube.copy(deep=True)
     with pytest.raises(ValueError, match=message):
-        store.fill(cube, args.pop("index"), **args)
+        store.fill(cube, store.BlockRecord(**args))
     xr.testing.assert_identical(store.as_dataset(cube), store.as_dataset(before))
 
 

@@ -7,22 +7,23 @@ import sys
 import numpy as np
 import pytest
 import xarray as xr
-from storetest_cubes import block_arrays
+from storetest_cubes import block_record
 
 import store
-from store.journal import FIELDS, JournalWarning
+from store.journal import JournalWarning
+from store.record import FIELDS
 
 BLOCKS = {0: np.arange(0, 8), 1: np.arange(8, 16), 3: np.array([23, 16, 20])}
 
 
-def _payload(cube, index, seed=0):
-    return store.block_payload(index, **block_arrays(cube, index, seed))
+def _record(cube, index, seed=0):
+    return block_record(cube, index, seed)
 
 
 def _journal_with_blocks(cube, folder):
     journal = store.Journal(folder)
     for block_id, index in BLOCKS.items():
-        journal.write(block_id, _payload(cube, index, seed=block_id))
+        journal.write(block_id, _record(cube, index, seed=block_id))
     return journal
 
 
@@ -32,11 +33,12 @@ def test_write_done_read_roundtrip(cube, tmp_path):
     read = dict(journal.read())
     assert sorted(read) == sorted(BLOCKS)
     for block_id, index in BLOCKS.items():
-        expected = _payload(cube, index, seed=block_id)
-        assert set(read[block_id]) == set(expected)
+        expected = _record(cube, index, seed=block_id).arrays()
+        got = read[block_id].arrays()
+        assert set(got) == set(expected)
         for key, array in expected.items():
-            np.testing.assert_array_equal(read[block_id][key], array)
-            assert read[block_id][key].dtype == FIELDS.get(key, np.float64)
+            np.testing.assert_array_equal(got[key], array)
+            assert got[key].dtype == FIELDS.get(key, np.float64)
     assert sorted(p.name for p in (tmp_path / "journal").iterdir()) == [
         "block-000000.npz",
         "block-000001.npz",
@@ -80,43 +82,42 @@ def test_empty_or_missing_journal(tmp_path):
 
 def test_rewriting_a_block_replaces_it(cube, tmp_path):
     journal = store.Journal(tmp_path)
-    journal.write(2, _payload(cube, np.arange(3), seed=1))
-    journal.write(2, _payload(cube, np.arange(3), seed=2))
-    ((block_id, payload),) = journal.read()
-    np.testing.assert_array_equal(payload["status"], _payload(cube, np.arange(3), seed=2)["status"])
+    journal.write(2, _record(cube, np.arange(3), seed=1))
+    journal.write(2, _record(cube, np.arange(3), seed=2))
+    ((block_id, record),) = journal.read()
+    np.testing.assert_array_equal(record.status, _record(cube, np.arange(3), seed=2).status)
 
 
 def test_rebuild_equals_filling_directly(cube, tmp_path):
     journal = _journal_with_blocks(cube, tmp_path)
     direct = cube.copy(deep=True)
     for block_id, index in BLOCKS.items():
-        store.fill(direct, index, **block_arrays(cube, index, seed=block_id))
+        store.fill(direct, block_record(cube, index, seed=block_id))
     pristine = cube.copy(deep=True)
     rebuilt = store.rebuild(cube, journal)
     xr.testing.assert_identical(store.as_dataset(rebuilt), store.as_dataset(direct))
     xr.testing.assert_identical(store.as_dataset(cube), store.as_dataset(pristine))  # not modified
     written = np.concatenate(list(BLOCKS.values()))
     not_ok = np.concatenate(
-        [i[block_arrays(cube, i, seed=b)["status"] != 0] for b, i in BLOCKS.items()]
+        [i[block_record(cube, i, seed=b).status != 0] for b, i in BLOCKS.items()]
     )
     expected = (set(range(cube["status"].size)) - set(written)) | set(not_ok)
     assert set(store.pending_index(rebuilt)) == expected
 
 
 @pytest.mark.parametrize(
-    "payload, message",
+    "arrays, message",
     [
-        (
-            {"index": np.arange(2)},
-            r"journal payload lacks \['status', 'cost_s', 'steps', 'evals'\]",
-        ),
-        ({**{k: np.zeros(2) for k in FIELDS}, "F_mean": np.zeros(3)}, r"'F_mean': \(3,\)"),
-        ({**{k: np.zeros((2, 2)) for k in FIELDS}}, r"must have index.s length 2 first"),
+        ({"index": np.arange(2)}, r"block record lacks \['status', 'cost_s', 'steps', 'evals'\]"),
+        ({**{k: np.zeros(2, int) for k in FIELDS}, "F_mean": np.zeros(3)}, r"'F_mean': \(3,\)"),
+        ({**{k: np.zeros((2, 2), int) for k in FIELDS}, "index": np.arange(2)},
+         r"must have index.s length 2 first"),
+        ({k: np.zeros(2) for k in FIELDS}, r"flat_index must be a 1-D integer array"),
     ],
 )
-def test_write_refuses_bad_payloads(tmp_path, payload, message):
+def test_a_bad_block_record_is_refused_before_anything_is_written(tmp_path, arrays, message):
     with pytest.raises(ValueError, match=message):
-        store.Journal(tmp_path).write(0, payload)
+        store.Journal(tmp_path).write(0, store.BlockRecord.from_arrays(arrays))
     assert list(tmp_path.iterdir()) == []
 
 
@@ -124,11 +125,5 @@ def test_block_id_and_name_clash_errors(tmp_path):
     with pytest.raises(ValueError, match="block_id must be a non-negative integer, got -1"):
         store.Journal(tmp_path).path(-1)
     with pytest.raises(ValueError, match=r"output names \['status'\] clash"):
-        store.block_payload(
-            np.arange(1),
-            {"status": np.zeros(1)},
-            np.zeros(1),
-            np.zeros(1),
-            np.zeros(1),
-            np.zeros(1),
-        )
+        store.BlockRecord(np.arange(1), np.zeros(1), np.zeros(1), np.zeros(1), np.zeros(1),
+                          outputs={"status": np.zeros(1)})

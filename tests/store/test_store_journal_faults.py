@@ -9,7 +9,7 @@ import sys
 import numpy as np
 import pytest
 import xarray as xr
-from storetest_cubes import block_arrays
+from storetest_cubes import block_record
 
 import store
 from store.journal import CHECKSUM, JournalWarning, checksum
@@ -20,7 +20,7 @@ PLAN = [np.arange(0, 8), np.arange(8, 16), np.arange(16, 24)]   # the plan's blo
 def _journal(cube, folder):
     journal = store.Journal(folder)
     for b, index in enumerate(PLAN):
-        journal.write(b, store.block_payload(index, **block_arrays(cube, index, seed=b)))
+        journal.write(b, block_record(cube, index, seed=b))
     return journal
 
 
@@ -91,11 +91,9 @@ def test_a_block_that_does_not_fit_the_cube_is_set_aside(cube, tmp_path):
     """Checksummed (the writer's own bug), but status codes out of range, an index out
     of the cube or another block's points: set aside, never a ValueError."""
     journal = _journal(cube, tmp_path)
-    bad = block_arrays(cube, PLAN[0])
-    bad["status"] = np.full(8, 7, np.int8)
-    journal.write(0, store.block_payload(PLAN[0], **bad))
-    journal.write(1, store.block_payload(np.arange(100, 108), **block_arrays(cube, PLAN[1])))
-    journal.write(5, store.block_payload(PLAN[2], **block_arrays(cube, PLAN[2])))
+    journal.write(0, block_record(cube, PLAN[0], status=np.full(8, 7, np.int8)))
+    journal.write(1, block_record(cube, PLAN[1], index=np.arange(100, 108)))
+    journal.write(5, block_record(cube, PLAN[2]))
     with pytest.warns(JournalWarning) as caught:
         rebuilt = store.rebuild(cube, journal, PLAN)
     messages = sorted(str(w.message) for w in caught)
@@ -138,10 +136,10 @@ def test_without_repair_a_bad_block_is_skipped_quietly_and_left_in_place(cube, t
 def test_temporaries_of_a_killed_writer_are_removed_on_the_next_read(cube, tmp_path):
     journal = _journal(cube, tmp_path)
     code = ("import sys, numpy as np; sys.path.insert(0, %r); import store; "
-            "from storetest_cubes import make_cube, block_arrays; c = make_cube(); "
+            "from storetest_cubes import make_cube, block_record; c = make_cube(); "
             "j = store.Journal(%r); import os, signal; "
             "store.atomic.fsync_file = lambda p: os.kill(os.getpid(), signal.SIGKILL); "
-            "j.write(7, store.block_payload(np.arange(3), **block_arrays(c, np.arange(3))))"
+            "j.write(7, block_record(c, np.arange(3)))"
             % (str(__import__("pathlib").Path(__file__).parent), str(tmp_path)))
     proc = subprocess.run([sys.executable, "-c", code])
     assert proc.returncode == -9
@@ -155,7 +153,7 @@ def test_rebuild_of_a_good_journal_is_unchanged(cube, tmp_path, recwarn):
     journal = _journal(cube, tmp_path)
     direct = cube.copy(deep=True)
     for b, index in enumerate(PLAN):
-        store.fill(direct, index, **block_arrays(cube, index, seed=b))
+        store.fill(direct, block_record(cube, index, seed=b))
     xr.testing.assert_identical(store.as_dataset(store.rebuild(cube, journal, PLAN)),
                                 store.as_dataset(direct))
     assert not recwarn.list

@@ -5,37 +5,41 @@ layout before groups) still opens, with groups after it."""
 
 import warnings
 
+from dataclasses import replace
+
 import numpy as np
 import xarray as xr
-from storetest_cubes import block_arrays
+from storetest_cubes import block_record
 
 import store
-from store.journal import FIELDS, JournalWarning
+from store.journal import JournalWarning
+from store.record import FIELDS
 
 BLOCKS = {0: np.arange(0, 8), 1: np.arange(8, 16), 3: np.array([23, 16, 20])}
 
 
-def _payload(cube, index, seed=0):
-    return store.block_payload(index, **block_arrays(cube, index, seed))
+def _payload(cube, index, seed=0, fingerprint=None):
+    return replace(block_record(cube, index, seed), fingerprint=fingerprint)
 
 
 def test_a_group_reads_back_as_its_blocks_with_their_engine(cube, tmp_path):
     journal = store.Journal(tmp_path / "journal")
-    journal.write_group([(b, _payload(cube, i, seed=b)) for b, i in BLOCKS.items()], "fp1")
+    journal.write_group([(b, _payload(cube, i, seed=b, fingerprint="fp1"))
+                         for b, i in BLOCKS.items()])
     assert [p.name for p in (tmp_path / "journal").iterdir()] == ["group-00000000.npz"]
     read = dict(journal.read())
     assert sorted(read) == sorted(BLOCKS) and journal.done() == set(BLOCKS)
     for b, index in BLOCKS.items():
-        expected = _payload(cube, index, seed=b)
-        assert set(read[b]) == set(expected)
+        expected, got = _payload(cube, index, seed=b).arrays(), read[b].arrays()
+        assert set(got) == set(expected)
         for key, array in expected.items():
-            np.testing.assert_array_equal(read[b][key], array)
-            assert read[b][key].dtype == FIELDS.get(key, np.float64)
-        assert journal.engine_of(b) == "fp1"
+            np.testing.assert_array_equal(got[key], array)
+            assert got[key].dtype == FIELDS.get(key, np.float64)
+        assert read[b].fingerprint == journal.load(b).fingerprint == "fp1"
     # the cube rebuilt from the group equals the cube filled block by block
     direct = cube.copy(deep=True)
     for b, index in BLOCKS.items():
-        store.journal.fill_block(direct, _payload(cube, index, seed=b))
+        store.fill(direct, _payload(cube, index, seed=b))
     xr.testing.assert_identical(store.rebuild(cube, journal).to_dataset(), direct.to_dataset())
 
 
@@ -50,8 +54,7 @@ def test_block_files_then_groups_in_the_order_written(cube, tmp_path):
     read = dict(again.read())
     assert sorted(read) == [0, 1, 3]
     for b, seed in ((0, 10), (1, 21), (3, 33)):
-        np.testing.assert_array_equal(read[b]["cost_s"],
-                                      _payload(cube, BLOCKS[b], seed=seed)["cost_s"])
+        np.testing.assert_array_equal(read[b].cost_s, _payload(cube, BLOCKS[b], seed=seed).cost_s)
     assert sorted(p.name for p in (tmp_path / "journal").iterdir())[-1] == "group-00000002.npz"
 
 
@@ -73,8 +76,7 @@ def test_a_damaged_group_is_set_aside_whole_and_older_results_stand(cube, tmp_pa
         "group-00000001"]
     read = dict(journal.read())            # ... and block 0's earlier result read from now on
     assert sorted(read) == [0]
-    np.testing.assert_array_equal(read[0]["cost_s"],
-                                  _payload(cube, BLOCKS[0], seed=1)["cost_s"])
+    np.testing.assert_array_equal(read[0].cost_s, _payload(cube, BLOCKS[0], seed=1).cost_s)
 
 
 def test_a_block_of_other_points_sets_its_group_aside(cube, tmp_path):

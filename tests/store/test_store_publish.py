@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import xarray as xr
-from storetest_cubes import block_arrays, make_cube
+from storetest_cubes import block_record, make_cube
 from storetest_writer import noise
 
 import store
@@ -47,7 +47,7 @@ def test_writer_dead_before_rename_leaves_old_cube_readable(cube, tmp_path):
     orphan.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 1000)  # a torn HDF5 file, never renamed
     xr.testing.assert_identical(store.as_dataset(store.open_cube(path)), store.as_dataset(cube))
     index = np.arange(5)
-    store.fill(cube, index, **block_arrays(cube, index))
+    store.fill(cube, block_record(cube, index))
     store.publish(cube, path)  # the next publish cleans the dead writer's leftover
     assert not orphan.exists() and _temps(tmp_path) == []
     xr.testing.assert_identical(store.as_dataset(store.open_cube(path)), store.as_dataset(cube))
@@ -131,7 +131,7 @@ def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, t
     assert disagreement(path, cube) is None
     assert disagreement(tmp_path / "none.h5", cube) == "the cube is missing"
     filled = cube.copy(deep=True)
-    store.fill(filled, np.arange(4), **block_arrays(cube, np.arange(4)))
+    store.fill(filled, block_record(cube, np.arange(4)))
     assert disagreement(path, filled) == "the cube's F_mean differs from the journal's"
     estimated = cube.copy()
     estimated.attrs["error_estimate"] = "{}"

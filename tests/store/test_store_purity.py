@@ -22,8 +22,8 @@ sweep = store.SweepDir(root, "c0ffee")
 empty = averaged_cube()
 journal = store.Journal(sweep.journal)
 index = np.arange(10)
-journal.write(0, store.block_payload(index, {{n: np.ones(10) for n in store.output_names(empty)}},
-                                     np.zeros(10), np.ones(10), np.ones(10), np.ones(10)))
+journal.write(0, store.BlockRecord(index, np.zeros(10), np.ones(10), np.ones(10), np.ones(10),
+                                   {{n: np.ones(10) for n in store.output_names(empty)}}))
 store.publish(store.rebuild(empty, journal), sweep.cube)
 ds = store.open_cube(sweep.cube)
 store.Catalogue(root).list()

@@ -6,10 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from store.record import BlockRecord
 from sweeps.planning import plan as planning
 from sweeps.planning.plan import blocks_per_task, make_plan
 from sweeps.run import dispatch
 from sweeps.spec import parse_spec
+from sweeps.version import results_fingerprint
 from sweeps.workers import task
 
 
@@ -23,14 +25,17 @@ def test_one_block_a_task_below_the_ceiling_more_beyond():
     assert blocks_per_task(0, 1.0, 10) == blocks_per_task(4, 0.0, 10) == 1
 
 
-def _instant(scene, points, p, settings) -> dict:
+TASK_POINTS: list[int] = []   # points of each task computed (the workers are threads here)
+
+
+def _instant(scene, points, p, settings, index):
     """compute_block at once: every output is the point's omega (so a block's values tell
     which points it was given)."""
+    TASK_POINTS.append(len(points))
     n = len(points)
-    return {**{k: points[:, 1].copy() for k in scene.outputs},
-            "status": np.zeros(n, np.int8), "cost_s": np.full(n, 0.5),
-            "steps": np.ones(n, np.int64), "evals": np.ones(n, np.int64),
-            "fingerprint": "fp", "task_points": n}
+    return BlockRecord(index, np.zeros(n), np.full(n, 0.5), np.ones(n), np.ones(n),
+                       {k: points[:, 1].copy() for k in scene.outputs},
+                       fingerprint=results_fingerprint())
 
 
 class _Sink:
@@ -65,13 +70,13 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
     plan.block_s = 1.0
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
-    monkeypatch.setattr(task, "META", task.META + ("task_points",))
     sink = _Sink()
     with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
                       dashboard_address=None) as cluster, Client(cluster) as client:
         dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
     assert sorted(sink.got) == list(range(len(plan.blocks)))
     points = plan.points
-    for b, result in sink.got.items():   # each block has its own points' values
-        np.testing.assert_array_equal(result["F_mean"], points[plan.blocks[b], 1])
-    assert max(r["task_points"] for r in sink.got.values()) == 3 * 4   # 3 blocks in a task
+    for b, record in sink.got.items():   # each block has its own points' values
+        np.testing.assert_array_equal(record.index, plan.blocks[b])
+        np.testing.assert_array_equal(record.outputs["F_mean"], points[plan.blocks[b], 1])
+    assert max(TASK_POINTS) == 3 * 4 and sum(TASK_POINTS) == plan.n_points   # 3 blocks a task

@@ -6,7 +6,9 @@ import warnings
 
 import pytest
 
+from engine.integrators import stability_region
 from sweeps.spec import fixed_step as stability
+from sweeps.spec.grid import base_params
 from sweeps.spec.accuracy import FIXED_H, FIXED_STEPS, RK4_WHERE, numerics
 from sweeps.planning.plan import make_plan
 from sweeps.spec import SpecError, SpecWarning, parse_spec
@@ -41,8 +43,8 @@ def accepted(data):
 
 
 def test_rk4_stability_bounds_come_from_the_tableau():
-    assert stability.reach("rk4", math.pi) == pytest.approx(2.7853, abs=1e-4)
-    assert stability.reach("rk4", math.pi / 2) == pytest.approx(2 * math.sqrt(2), abs=1e-6)
+    assert stability_region.reach("rk4", math.pi) == pytest.approx(2.7853, abs=1e-4)
+    assert stability_region.reach("rk4", math.pi / 2) == pytest.approx(2 * math.sqrt(2), abs=1e-6)
 
 
 def test_unstable_explicit_step_of_issue_10_is_refused():
@@ -161,8 +163,7 @@ def test_levels_never_checked_for_stability():
     """A level is the calibrated choice (sweeps.spec.accuracy); only explicit numerics are
     held to the bound here."""
     s = parse_spec({**SEC7, "accuracy": "draft"})
-    g = stability.grid_summary(s)
-    assert stability.stability_faults(s, g, numerics(s, 100.0)) == []
+    assert stability.stability_faults(s, s.grid_facts, base_params(s), numerics(s, 100.0)) == []
 
 
 # --- the step budget ----------------------------------------------------------------------

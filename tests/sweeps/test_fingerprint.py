@@ -147,7 +147,7 @@ with warnings.catch_warnings():
     plan = make_plan(sim)
     out = task.compute_block(plan.scene, plan.block_points(0), plan.params,
                              plan.numerics.settings)
-    assert (out["status"] == 0).all(), out
+    assert (out.status == 0).all(), out
 print(json.dumps(sorted(set(sys.modules) - before)))
 """
 

@@ -27,6 +27,8 @@ from sweeps.version import results_fingerprint
 
 from .test_hpc import _wait_for, _wait_for_workers
 
+pytestmark = pytest.mark.long   # dask workers of another engine
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = {"name": "foreign", "friction": "lugre", "dither": "square-velocity",
         "outputs": ["F_mean", "v_mean", "v_slow_p2p"], "accuracy": "draft", "block_size": 1,
@@ -125,7 +127,7 @@ def test_beside_a_good_worker_it_computes_nothing_and_the_cube_is_clean(schedule
     assert not log.exists(), "the foreign worker computed a block"
     key = sweeps.load_spec(SPEC).sweep_id
     journal = store.Journal(store.SweepDir(tmp_path / "store", key).journal)
-    assert {journal.engine_of(b) for b in journal.files()} == {results_fingerprint()}
+    assert {journal.load(b).fingerprint for b in journal.files()} == {results_fingerprint()}
     remote = sweeps.open_sweep(key, store=tmp_path / "store")
     sweeps.run_sweep(SPEC, store=tmp_path / "local", workers=1, progress=False)
     local = sweeps.open_sweep(key, store=tmp_path / "local")
@@ -154,14 +156,14 @@ def test_the_sink_never_journals_a_block_of_another_engine(tmp_path):
 
     def result(b, fingerprint):
         n = len(plan.blocks[b])
-        return {**{k: np.full(n, 0.5) for k in plan.outputs}, "status": np.zeros(n, np.int8),
-                "cost_s": np.zeros(n), "steps": np.ones(n, np.int64),
-                "evals": np.ones(n, np.int64), "fingerprint": fingerprint}
+        return store.BlockRecord(plan.blocks[b], np.zeros(n), np.zeros(n), np.ones(n),
+                                 np.ones(n), {k: np.full(n, 0.5) for k in plan.outputs},
+                                 fingerprint=fingerprint)
 
     sink.many([(0, result(0, "0123456789ab")), (1, result(1, results_fingerprint())),
-               (2, {**result(2, None)})])
+               (2, result(2, None))])
     lease.end("failed")
     assert sorted(journal.files()) == [1] and sink.foreign_blocks == 2
-    assert journal.engine_of(1) == results_fingerprint()
+    assert journal.load(1).fingerprint == results_fingerprint()
     status = sink.cube["status"].values.ravel()
     assert (status[plan.blocks[0]] != 0).all() and (status[plan.blocks[1]] == 0).all()

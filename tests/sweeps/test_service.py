@@ -29,6 +29,8 @@ from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
+pytestmark = pytest.mark.long   # the queue's processes: kills, signals, two submitters
+
 # 16 one-point blocks; a test acts on the running sweep while it holds them at the gate (it
 # needed blocks of 0.3-2 s, t_end = 900, to have time to act between them, and hoped)
 SLOW_SPEC = RESUME_SPEC.replace(
@@ -361,16 +363,16 @@ def _fake_runs(monkeypatch, how):
 
     real = REAL_COMPUTE_BLOCK
 
-    def some_points_fail(scene, points, p, settings):
-        out = real(scene, points, p, settings)
+    def some_points_fail(scene, points, p, settings, index):
+        out = real(scene, points, p, settings, index)
         if points[0, 0] == 0.0:   # the blocks at W = 0 fail
-            out["status"] = np.full(len(points), store.FAILED, np.int8)
+            out.status = np.full(len(points), store.FAILED, np.int8)
         return out
 
-    def crash(scene, points, p, settings):
+    def crash(scene, points, p, settings, index):
         if points[0, 0] > 0.5:
             raise RuntimeError("the cluster went away")
-        return real(scene, points, p, settings)
+        return real(scene, points, p, settings, index)
 
     monkeypatch.setattr(T, "compute_block", {"partial": some_points_fail, "crash": crash}[how])
 
@@ -425,13 +427,13 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
     root = tmp_path / "store"
     calls = []
 
-    def slow(scene, points, p, settings):
+    def slow(scene, points, p, settings, index):
         calls.append(1)
         if len(calls) == 3:   # someone else now holds the sweep
             store.Catalogue(root).update(plan.sweep_id, owner="elsewhere:1",
                                          heartbeat=time.time())
         time.sleep(0.3)
-        return REAL_COMPUTE_BLOCK(scene, points, p, settings)
+        return REAL_COMPUTE_BLOCK(scene, points, p, settings, index)
 
     monkeypatch.setattr(T, "compute_block", slow)
     res = submit(plan, root, progress=False)

@@ -30,7 +30,7 @@ from . import slurm
 
 # a first run compiles the kernels in the local run and in the jobs: 900 s was too short
 # with the machine's two cores shared by 30 processes
-pytestmark = [pytest.mark.slurm, pytest.mark.timeout(2400)]
+pytestmark = [pytest.mark.long, pytest.mark.slurm, pytest.mark.timeout(2400)]   # long: a real Slurm
 
 SPEC = {"name": "slurm", "friction": "lugre", "dither": "square-velocity",
         "outputs": ["F_mean", "v_mean", "v_slow_p2p"], "accuracy": "draft", "block_size": 1,
@@ -70,7 +70,7 @@ def _same(root: Path, local) -> None:
     for name in SPEC["outputs"]:
         np.testing.assert_array_equal(cube[name].values, local[name].values)
     journal = store.Journal(store.SweepDir(root, key).journal)
-    assert {journal.engine_of(b) for b in journal.files()} == {results_fingerprint()}
+    assert {journal.load(b).fingerprint for b in journal.files()} == {results_fingerprint()}
 
 
 def _submit(tmp_path, env, *extra):

@@ -3,7 +3,6 @@ and what is allowed; the sweep id hashes results-changing content only."""
 import numpy as np
 import pytest
 
-from sweeps.spec import grid
 from sweeps.spec import SpecError, load_spec, parse_spec
 
 BASE = {"name": "t", "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 4}, "omega": [100.0]}}
@@ -79,11 +78,11 @@ def test_hash_ignores_cosmetic_fields_but_not_physics():
 def test_axes_ranges_and_defaults():
     spec = parse_spec({"grid": {"W": {"start": 0, "stop": 3, "num": 4},
                                 "omega": {"start": 10, "stop": 1000, "num": 3, "scale": "log"}}})
-    c = grid.coords(spec)
+    c = spec.grid_facts.coords
     np.testing.assert_allclose(c["W"], [0, 1, 2, 3])
     np.testing.assert_allclose(c["omega"], [10, 100, 1000])
     assert c["v_d"].tolist() == [0.1]          # paper Sec. 5.1 default vd
-    pts = grid.points(spec)
+    pts = spec.grid_facts.points
     assert pts.shape == (12, 4)
     # C order over (W, omega, v_ref, v_d): the flat index is the cube position
     np.testing.assert_allclose(pts[1], [0.0, 100.0, 0.0, 0.1])
@@ -259,7 +258,7 @@ def test_numpy_values_from_the_python_api():
     spec = parse_spec({**BASE, "grid": {"W": np.linspace(0.0, 1.0, 3),
                                         "omega": (np.float64(100.0),)},
                        "params": {"sigma0": np.float64(150.0)}})
-    assert grid.coords(spec)["W"].tolist() == [0.0, 0.5, 1.0]
+    assert spec.grid_facts.coords["W"].tolist() == [0.0, 0.5, 1.0]
 
 
 # --- files ------------------------------------------------------------------------------
@@ -337,3 +336,23 @@ def test_example_specs_still_validate():
         warnings.simplefilter("error", SpecWarning)
         for path in specs:
             load_spec(path)
+
+
+def test_the_grid_is_resolved_once_per_spec(monkeypatch):
+    """Parsing, planning (at every level), the error estimate's finer numerics and the
+    plan's points all read the one GridFacts of the spec (issue 27: the axes were built
+    about six times per submit, the full mesh once more for the time estimate)."""
+    from sweeps.estimates.error_estimate import finer_numerics
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec.grid import GridFacts
+
+    built = []
+    real = GridFacts.of.__func__
+    monkeypatch.setattr(GridFacts, "of",
+                        classmethod(lambda cls, spec: built.append(1) or real(cls, spec)))
+    spec = parse_spec({**BASE, "accuracy": "draft", "dither": "square-velocity",
+                       "grid": {"W": [0.0, 0.5], "omega": [100.0, 300.0], "v_ref": [0.4]}})
+    plans = [make_plan(spec, level) for level in (None, "draft", "standard", "reference")]
+    finer_numerics(plans[0])
+    assert plans[0].points is plans[1].points is spec.grid_facts.points
+    assert len(built) == 1
