@@ -109,15 +109,15 @@ def sink_run(plan, root: Path, group: int = 1) -> tuple[float, float, int]:
     return seconds, cpu, n
 
 
-def bench_sink(tmp: Path, n_blocks: int) -> dict[int, float]:
-    """Blocks/s one by one, in groups of 20 (what the dispatch finds ready in one 20-ms
-    tick at 1,000 blocks/s) and of 100."""
+def bench_sink(tmp: Path, n_blocks: int) -> dict[int, tuple[float, float]]:
+    """Blocks/s (and CPU ms a block) one by one, in groups of 20 (what the dispatch finds
+    ready in one 20-ms tick at 1,000 blocks/s) and of 100."""
     plan, rates = _plan(spec_of(16 * n_blocks, block=16)), {}
     for group in (1, 20, 100):
         seconds, cpu, n = sink_run(plan, tmp / f"sink-{group}", group)
-        rates[group] = n / seconds
+        rates[group] = (n / seconds, 1e3 * cpu / n)
         print(f"sink      {n} blocks of 16 points, {group:>3} at a time (journal + cube + "
-              f"catalogue + publish): {rates[group]:7,.0f} blocks/s, "
+              f"catalogue + publish): {rates[group][0]:7,.0f} blocks/s, "
               f"{1e3 * cpu / n:.2f} ms CPU a block")
     return rates
 
@@ -173,7 +173,7 @@ def bench_memory(tmp: Path, sizes: list[int]) -> None:
         before = (peak - base, cube_mb)
 
 
-def bench_dask(tmp: Path, n_tasks: int) -> dict[str, float]:
+def bench_dask(tmp: Path, n_tasks: int) -> dict[str, tuple[float, float]]:
     """Tasks/s through the run's own dispatch and sink (a LocalCluster of 2 workers; the
     scheduler in this process, as with --cluster), every task one 16-point block."""
     from distributed import Client, LocalCluster
@@ -201,9 +201,9 @@ def bench_dask(tmp: Path, n_tasks: int) -> dict[str, float]:
             seconds, cpu = time.perf_counter() - t, time.process_time() - c
             lease.end("done")
         key = f"{threads}" + (f"+{more}" if more else "")
-        rates[key] = n_tasks / seconds
+        rates[key] = (n_tasks / seconds, 1e3 * cpu / n_tasks)
         print(f"dask      {n_tasks} tasks of 16 points, 2 workers x {threads:>2} threads"
-              f"{f' (+{more} addresses)' if more else '':<17}: {rates[key]:5,.0f} tasks/s, "
+              f"{f' (+{more} addresses)' if more else '':<17}: {rates[key][0]:5,.0f} tasks/s, "
               f"{1e3 * cpu / n_tasks:.2f} ms CPU a task (dispatch + sink + scheduler)")
     return rates
 
@@ -213,25 +213,26 @@ class _NoBar:
         pass
 
 
-def table(sink_rates: dict[int, float], dask_rates: dict[str, float]) -> None:
-    """Workers one submitter keeps busy, for a point cost (the plan's ~1 s blocks)."""
-    from sweeps.planning.plan import BLOCK_POINTS, BLOCK_SECONDS, SUBMITTER_TASKS_PER_S
+def table(sink: dict[int, tuple[float, float]], dask: dict[str, tuple[float, float]]) -> None:
+    """Workers one submitter keeps busy, for a point cost (the plan's ~1 s blocks): tasks/s
+    as measured here (wall), and as one free core gives (1 / CPU a task); blocks a task as
+    the dispatch chooses for 1000 workers (sweeps.planning.plan.blocks_per_task)."""
+    from sweeps.planning.plan import BLOCK_POINTS, BLOCK_SECONDS, blocks_per_task
 
     lo, hi = BLOCK_POINTS["simulate"]
-    tasks = min(dask_rates["32"], sink_rates[20])
-    blocks = max(sink_rates.values())
-    print(f"\nsubmitter: {tasks:,.0f} tasks/s of one block (min of dask at 65 in flight and "
-          f"the sink in groups of 20); the journal {blocks:,.0f} blocks/s in groups; "
-          f"the plan assumes {SUBMITTER_TASKS_PER_S:,.0f} tasks/s")
-    print("point cost   block (points)   block time   workers busy, 1 block a task   "
-          "blocks a task for 1000 workers   workers busy then")
+    wall = min(dask["32"][0], sink[20][0])
+    core = 1e3 / (dask["32+1000"][1] + sink[20][1])
+    print(f"\nsubmitter: {wall:,.0f} tasks/s of one block measured here (dask at 65 in flight,"
+          f" sink in groups of 20); one free core: {core:,.0f} tasks/s (CPU of a task with "
+          f"1000 addresses + the sink's)")
+    print("point cost   block (points)   block time   workers busy: here / one core   "
+          "1000 workers: blocks a task, tasks/s")
     for cost in (1e-4, 1e-3, 1e-2, 1e-1, 1.0):
         points = int(min(hi, max(lo, round(BLOCK_SECONDS / cost))))
         seconds = points * cost
-        k = max(1, int(np.ceil(1000 / (SUBMITTER_TASKS_PER_S * seconds))))
-        busy = min(tasks * k * seconds, blocks * seconds)
+        k = blocks_per_task(1000, seconds, 10**6)
         print(f"{cost * 1e3:8.1f} ms   {points:>14}   {seconds:8.3f} s   "
-              f"{tasks * seconds:28,.0f}   {k:30}   {busy:17,.0f}")
+              f"{wall * seconds:13,.0f} / {core * seconds:9,.0f}   {k:21} {1000 / (k * seconds):8,.0f}")
 
 
 def cpu_model() -> str:
@@ -262,8 +263,8 @@ def main() -> None:
     print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     if args.only is None:
         table(sink_rates, dask_rates)
-        print(json.dumps({"sink_blocks_per_s": {k: round(v) for k, v in sink_rates.items()},
-                          "dask_tasks_per_s": {k: round(v) for k, v in dask_rates.items()}}))
+        print(json.dumps({"sink_blocks_per_s": {k: round(v[0]) for k, v in sink_rates.items()},
+                          "dask_tasks_per_s": {k: round(v[0]) for k, v in dask_rates.items()}}))
 
 
 if __name__ == "__main__":

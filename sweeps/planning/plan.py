@@ -38,12 +38,13 @@ OMEGA_FLOOR = 50.0
 SECONDS_PER_RADIAN = 1e-5
 BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
-# Tasks per second one submitting process hands out and takes back (dask's scheduler and
-# client, the journal, the cube: about 2 ms of its CPU per task, scripts/bench_scale.py,
-# docs/BATCH.md). Workers that would ask for more (threads / block seconds) get several
-# blocks per task instead (blocks_per_task); the journal keeps the blocks, so a resume
-# with any number of workers finds them.
-SUBMITTER_TASKS_PER_S = 200.0
+# Tasks per second one submitting process hands out and takes back: dask's scheduler and
+# client, the journal and the cube cost it 4.9 ms of CPU a task with 65 in flight, 9.3 ms
+# with 1000 workers in every task's restriction (scripts/bench_scale.py, docs/BATCH.md),
+# so 100 tasks/s keep about one core busy. Workers that would ask for more (threads /
+# block seconds) get several blocks a task instead (blocks_per_task); the journal keeps
+# blocks, so a resume with any number of workers finds them.
+SUBMITTER_TASKS_PER_S = 100.0
 
 
 @dataclass
