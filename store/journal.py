@@ -25,7 +25,6 @@ points are computed again. ``_engine``, inside the checksum, is the records'
 
 from __future__ import annotations
 
-import hashlib
 import io
 import os
 import re
@@ -58,12 +57,7 @@ class BadBlock(ValueError):
 
 def checksum(block_id: int, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
     """SHA-256 (32 uint8) of a block's id and its arrays' names, dtypes, shapes and bytes."""
-    h = hashlib.sha256(f"ditherlab journal block {int(block_id)}\n".encode())
-    for name in sorted(arrays):
-        a = np.ascontiguousarray(arrays[name])
-        h.update(f"{name} {a.dtype.str} {a.shape}\n".encode())
-        h.update(a.tobytes())
-    return np.frombuffer(h.digest(), dtype=np.uint8)
+    return groups.digest(f"block {int(block_id)}", arrays)
 
 
 def block_bytes(n_points: int, n_values: int) -> int:

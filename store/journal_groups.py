@@ -37,10 +37,10 @@ def next_seq(folder: Path) -> int:
     return max(seqs, default=-1) + 1
 
 
-def digest(seq: int, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
-    """SHA-256 (32 uint8) of a group's number and its arrays' names, dtypes, shapes and
-    bytes (as ``store.journal.checksum`` for a block)."""
-    h = hashlib.sha256(f"ditherlab journal group {int(seq)}\n".encode())
+def digest(label: str, arrays: Mapping[str, np.ndarray]) -> np.ndarray:
+    """SHA-256 (32 uint8) of ``label`` (``group 42``; ``block 42``: store.journal.checksum)
+    and the arrays' names, dtypes, shapes and bytes."""
+    h = hashlib.sha256(f"ditherlab journal {label}\n".encode())
     for name in sorted(arrays):
         a = np.ascontiguousarray(arrays[name])
         h.update(f"{name} {a.dtype.str} {a.shape}\n".encode())
@@ -62,7 +62,7 @@ def image(seq: int, items: Sequence[tuple[int, Mapping[str, np.ndarray]]],
     arrays[SIZES] = np.array([len(a["index"]) for _, a in items], dtype=np.int64)
     arrays.update(extra)
     buf = io.BytesIO()
-    np.savez(buf, **arrays, **{checksum_key: digest(seq, arrays)})
+    np.savez(buf, **arrays, **{checksum_key: digest(f"group {int(seq)}", arrays)})
     return buf.getbuffer()
 
 
@@ -115,7 +115,7 @@ def _verified(path: Path, checksum_key: str) -> dict[int, dict]:
     seq = NAME.match(Path(path).name)
     if stored is None or seq is None:
         raise ValueError("no checksum (not a file ditherlab wrote)")
-    if not np.array_equal(stored, digest(int(seq.group(1)), arrays)):
+    if not np.array_equal(stored, digest(f"group {int(seq.group(1))}", arrays)):
         raise ValueError("checksum mismatch (the file changed after it was written)")
     ids, sizes = arrays.pop(BLOCKS, None), arrays.pop(SIZES, None)
     extra = {k: arrays.pop(k) for k in [k for k in arrays if k.startswith("_")]}
