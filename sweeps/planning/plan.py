@@ -60,7 +60,6 @@ class Plan:
     costs: np.ndarray = field(repr=False)    # relative cost per point (point_costs)
     blocks: list[np.ndarray] = field(repr=False)
     refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
-    block_s: float = 0.0   # estimated seconds of one block (simulated sweeps; 0: unknown)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
 
     @property
@@ -154,11 +153,9 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
-    seconds = 0.0
-    if spec.method == "simulate":
+    if spec.method == "simulate" and not spec.block_size:
         seconds = costs.sum() * spec.time.t_end * SECONDS_PER_RADIAN
-        if not spec.block_size:
-            n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
+        n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
@@ -167,8 +164,7 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
         blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
                 scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, grid=g, costs=costs, blocks=blocks,
-                block_s=seconds / n_blocks)
+                outputs=outputs, grid=g, costs=costs, blocks=blocks)
 
 
 def blocks_per_task(threads: int, block_s: float, blocks_left: int,

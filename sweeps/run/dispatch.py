@@ -80,8 +80,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     """Keep one task per matching worker thread (plus one) in flight, the next submitted
     as one finishes; once ``sink.should_stop()``, submit no more and collect those in
     flight (a stop loses no finished work and waits for at most one task per worker). A
-    task computes ``blocks_per_task`` blocks (by the mean block's measured seconds; the
-    plan's estimate until one is back), journaled as blocks.
+    task computes ``blocks_per_task`` blocks (by the mean block's measured seconds: one
+    until blocks are back), journaled as blocks.
 
     Every REFRESH_S the workers are looked at again (``client`` is a
     :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
@@ -91,7 +91,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
 
     queue = list(reversed(todo))
     inflight: dict = {}        # future -> (its blocks, the workers it may run on)
-    cost = [plan.block_s, 1]   # seconds of computing, blocks: the mean block's seconds
+    cost = [0.0, 0]            # seconds computed, blocks back: the mean block's seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
     # event loop as each block finishes: one f.result() per block costs a round trip to that
     # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
@@ -101,7 +101,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     def fill() -> None:
         window, groups = sum(good.values()) + 1, []
         while queue and good and len(inflight) + len(groups) < window:
-            k = blocks_per_task(window - 1, cost[0] / cost[1], len(queue))
+            k = blocks_per_task(window - 1, cost[0] / max(cost[1], 1), len(queue))
             groups.append([queue.pop() for _ in range(min(k, len(queue)))])
         if groups:   # one message to the scheduler for them all: a submit each costs
             # 3.3x the submitter's CPU (5.4 against 1.7 ms a task; scripts/bench_scale.py)

@@ -33,7 +33,7 @@ def _instant(scene, points, p, settings, index):
     which points it was given)."""
     TASK_POINTS.append(len(points))
     n = len(points)
-    return BlockRecord(index, np.zeros(n), np.full(n, 0.5), np.ones(n), np.ones(n),
+    return BlockRecord(index, np.zeros(n), np.full(n, 0.25), np.ones(n), np.ones(n),
                        {k: points[:, 1].copy() for k in scene.outputs},
                        fingerprint=results_fingerprint())
 
@@ -66,8 +66,7 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
                        "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
                        "grid": {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
                                                            "num": 60}}})
-    plan = make_plan(spec)
-    plan.block_s = 1.0
+    plan = make_plan(spec)   # blocks of 4 points that say they took 0.25 s each: 1 s
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
     sink = _Sink()
