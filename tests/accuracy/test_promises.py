@@ -31,3 +31,18 @@ def test_draft_promise_for_the_elasto_plastic_mean_friction():
     for level in ("standard", "reference"):
         assert promise(level, "F_mean", "elastoplastic") == TARGET_ERROR[level]
     assert promise("draft", "F_mean", "lugre") == TARGET_ERROR["draft"]
+
+
+def test_the_elasto_plastic_reference_level_runs_at_rtol_1e_12():
+    """Measured on the error samples of specs/demo-stick-slip.toml and the small fig14
+    scenes (docs/ACCURACY.md 5.2): at DP5 rtol 1e-10 the alpha-booked shares were up to
+    9.6e-7 off, over reference's 1e-7; at 1e-12 4.5e-8. LuGre's reference is unchanged."""
+    from sweeps.spec import parse_spec
+    from sweeps.spec.accuracy import numerics
+
+    spec = promise_check.shipped_specs()["demo-stick-slip"]
+    ep = parse_spec({**spec, "accuracy": "reference"})
+    assert numerics(ep, 1e5).settings.rtol == 1e-12
+    assert numerics(ep, 1e5, "standard").settings.rtol == 1e-8
+    lugre = parse_spec({**promise_check.shipped_specs()["fig10-small"], "accuracy": "reference"})
+    assert numerics(lugre, 1e5).settings.rtol == 1e-10
