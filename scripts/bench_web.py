@@ -137,15 +137,16 @@ def cpu_costs(cube: Path, n: int = 3) -> None:
     quiet machine (the wall-clock figures above include waiting for a busy CPU)."""
     from sweeps.web.explorer import compute, spec_from_query
     from sweeps.web.renders import render
+    from sweeps.web.snapshot import CubeSnapshot
 
     data = cube.read_bytes()
-    render(data, "stick-slip", {}, None, "png")   # imports, fonts: once per drawing process
+    render(CubeSnapshot(None, data).ds, "stick-slip", {}, None, "png")   # imports, fonts
     compute(spec_from_query({"W_num": "3", "v_ref_num": "3"}))   # kernels loaded
     rows = {"first map, Fig. 14 31x31 (read + draw)": [], "explorer 200x200 compute": [],
             "explorer stability chart draw": [], "explorer curves draw": []}
     for i in range(n):
         t = time.process_time()
-        render(data, "stick-slip", {}, None, "png")
+        render(CubeSnapshot(None, data).ds, "stick-slip", {}, None, "png")
         rows["first map, Fig. 14 31x31 (read + draw)"].append(time.process_time() - t)
         t = time.process_time()
         ds = compute(spec_from_query({"W_num": "200", "v_ref_num": "200",

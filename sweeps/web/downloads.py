@@ -81,7 +81,7 @@ class MapImage(Base):
         key = (sweep_id, snap.key, kind, tuple(sorted(sel.items())), npick, fmt)
         try:
             maps = self.ctx.maps
-            fut = maps.get(key, lambda: maps.draw(snap.data, kind, sel, npick, fmt))
+            fut = maps.get(key, lambda: maps.draw(snap.ds, kind, sel, npick, fmt))
         except Busy as exc:
             raise Refused(503, str(exc)) from None
         try:

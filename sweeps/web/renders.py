@@ -1,8 +1,8 @@
 """Maps for the pages, drawn by :func:`sweeps.exports.draw_map` (the function behind
 ``ditherlab map``) and cached per cube publish.
 
-Renders are queued on ``RENDER_THREADS`` threads, each handing its map to a drawing
-process (matplotlib's Agg canvas, no pyplot): at most that many draw at once, however many
+Renders are queued on ``RENDER_THREADS`` threads, each handing its map to one of as many
+drawing processes (matplotlib's Agg canvas, no pyplot): at most that many draw at once, however many
 pages ask, and a drawing never holds the server's interpreter lock (pages and progress stay
 quick while a map is drawn). A map already being drawn is waited for,
 not drawn twice; more than ``MAX_WAITING`` maps waiting is refused (:class:`Busy`, 503)
@@ -17,7 +17,7 @@ from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
-RENDER_THREADS = 1
+RENDER_THREADS = 2   # the explorer's chart and curves are drawn side by side on 2 cores
 MAX_WAITING = 32
 CACHE_BYTES = 128 << 20
 MEDIA = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}
@@ -29,13 +29,10 @@ class Busy(Exception):
 
 def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:
     """One map of ``ds`` as bytes (``fmt`` png, svg or pdf), drawn into a temporary folder
-    outside the store. ``ds``: an ``xarray.Dataset``, or a cube file's bytes."""
+    outside the store. ``ds``: the ``xarray.Dataset`` the server already read (pickled to
+    the drawing process: a few ms, where opening the cube's bytes again took 250 ms)."""
     from ..exports import draw_map, pick_w
 
-    if isinstance(ds, bytes):
-        from .snapshot import CubeSnapshot
-
-        ds = CubeSnapshot(None, ds).ds
     if kind == "friction" and pick:
         ds = ds.sel(W=pick_w(ds, pick))
     with tempfile.TemporaryDirectory(prefix="ditherlab-web-") as tmp:
@@ -45,7 +42,14 @@ def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:
 
 
 def _warm() -> None:
-    import store.maps  # noqa: F401  (matplotlib and xarray loaded before the first map)
+    """matplotlib and xarray loaded, fonts and mathtext read, before the first map."""
+    import io
+
+    import store.maps
+
+    fig, ax = store.maps._figure()
+    ax.set_xlabel(r"$v_\mathrm{ref}$ x")
+    fig.savefig(io.BytesIO(), format="png")
 
 
 def _follow_parent(parent: int) -> None:
@@ -64,10 +68,11 @@ def _follow_parent(parent: int) -> None:
 
 
 class Drawer:
-    """The drawing process (spawned, so it shares no threads or locks with the server),
-    started again if it dies."""
+    """``processes`` drawing processes (spawned, so they share no threads or locks with the
+    server), started again if one dies."""
 
-    def __init__(self):
+    def __init__(self, processes: int = RENDER_THREADS):
+        self.processes = processes
         self._pool = None
         self._lock = threading.Lock()
 
@@ -79,9 +84,10 @@ class Drawer:
         with self._lock:
             if self._pool is None:
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"),
+                    self.processes, mp_context=multiprocessing.get_context("spawn"),
                     initializer=_follow_parent, initargs=(os.getpid(),))
-                self._pool.submit(_warm)
+                for _ in range(self.processes):   # each one started and warmed now
+                    self._pool.submit(_warm)
             return self._pool
 
     def __call__(self, *args) -> bytes:
@@ -115,7 +121,7 @@ class MapCache:
         self._size = 0
         self._lock = threading.Lock()
         self.drawn = 0          # maps drawn (the tests count them)
-        self.draw = Drawer()    # render(...) in the drawing process
+        self.draw = Drawer(threads)    # render(...) in a drawing process
 
     def get(self, key: tuple, draw) -> Future:
         """A future of the bytes for ``key``; ``draw()`` makes them if nobody has."""

@@ -11,11 +11,14 @@ import time
 from pathlib import Path
 
 import numpy as np
+import pytest
 import xarray as xr
 
 from sweeps.spec import load_spec
 
 from .conftest import BIN, SIMULATE_SPEC, ditherlab
+
+pytestmark = pytest.mark.long   # dask clusters and resumes
 
 DASK = Path(sys.executable).parent / "dask"
 TIMING = ("cost_s",)  # wall-clock seconds differ between runs; everything else must not

@@ -27,6 +27,8 @@ from sweeps.version import results_fingerprint
 
 from .test_hpc import _wait_for, _wait_for_workers
 
+pytestmark = pytest.mark.long   # dask workers of another engine
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = {"name": "foreign", "friction": "lugre", "dither": "square-velocity",
         "outputs": ["F_mean", "v_mean", "v_slow_p2p"], "accuracy": "draft", "block_size": 1,

@@ -15,6 +15,8 @@ import pytest
 
 import sweeps
 
+pytestmark = pytest.mark.long   # a dask scheduler and workers started by hand
+
 SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity", "outputs": ["v_mean"],
         "accuracy": "draft", "time": {"t_end": 4.0, "t_transient": 1.0},
         "grid": {"W": [0.0, 0.3], "omega": [200.0], "v_ref": [0.2, 0.4]}}

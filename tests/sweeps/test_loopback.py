@@ -19,6 +19,8 @@ import pytest
 
 from .conftest import SIMULATE_SPEC
 
+pytestmark = pytest.mark.long   # every socket of submit and serve
+
 BIN = str(Path(sys.executable).parent / "ditherlab")
 
 

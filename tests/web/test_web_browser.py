@@ -19,6 +19,8 @@ import pytest
 
 from .conftest import RUNNING_ID, ditherlab
 
+pytestmark = pytest.mark.long   # a real browser
+
 CHROMIUM = os.environ.get("DITHERLAB_CHROMIUM", "/usr/bin/chromium")
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-default-apps", "--no-first-run",
