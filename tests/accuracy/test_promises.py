@@ -1,7 +1,7 @@
 """Every shipped spec and gallery scene (small size) keeps every level's promise: the
 service's own error estimate (a sample re-run one level finer, sweeps.estimate) records no
 warning at draft, standard or reference (scripts/promise_check.py; issue 30: the demo's
-first output was a warning that F_mean changed more than draft promises). Slow: about
+first output was a warning that F_mean changed more than draft promises). Long: about
 seven sweeps of up to 49 points at each of three levels."""
 import sys
 from pathlib import Path
@@ -12,9 +12,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 import promise_check  # noqa: E402
 
 
-# about 400 s of CPU on two workers (docs/ACCURACY.md 5.2): on the shared 2-core machine at
-# load 8-11 it took 15 min, past the suite's 900 s hang guard
-@pytest.mark.slow
+# long (CI runs it, `-m long`): about 400 s of CPU on two workers (docs/ACCURACY.md 5.2);
+# on the shared 2-core machine at load 8-11 it took 15 min, past the suite's 900 s guard
+@pytest.mark.long
 @pytest.mark.timeout(2400)
 def test_no_shipped_spec_warns_at_any_level(tmp_path):
     rows = promise_check.check(promise_check.shipped_specs(), store=tmp_path / "store",
