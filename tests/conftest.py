@@ -1,12 +1,12 @@
 """Two kinds of tests are opt-in, named by their marker in ``-m``:
 
 - ``long``: tests that take long but guard what users rely on (sweeps on a real dask
-  cluster, kills and disk faults, the browser, Slurm, whole gallery figures). Deselected
+  cluster, kills and disk faults, the browser, Slurm, whole gallery figures and their
+  wrong-model checks, the promise check over every shipped spec). Deselected
   unless ``-m`` names them, so ``scripts/test`` stays a few minutes; ``.ci/run`` runs
   ``scripts/test`` and then ``scripts/test -m long``, so CI runs every one of them.
-- ``slow``: the studies (the full hard-case suite, the fault campaign, the promise check
-  over every shipped spec): skipped with the command that runs them (``scripts/test -m slow
-  tests/hard``); CI does not run them.
+- ``slow``: the studies (the full hard-case suite, the fault campaign): skipped with the
+  command that runs them (``scripts/test -m slow tests/hard``); CI does not run them.
 """
 from __future__ import annotations
 

@@ -56,19 +56,20 @@ def build(ctx, only=None, log=print) -> list[FigureResult]:
     as ``not computed`` (with its error; never as a verdict on the paper's claim) and the
     rest are still drawn."""
     results = []
-    for key, draw in FIGURES.items():
-        if only and key not in only:
-            continue
-        t0 = time.perf_counter()
-        try:
-            res = draw(ctx)
-        except Exception as exc:  # noqa: BLE001 -- one figure must not sink the page
-            error = f"{type(exc).__name__}: {exc}"
-            res = FigureResult(key, key, "", "(the figure could not be computed)",
-                               ctx.png(key), [Check("computation", error, "runs", False)],
-                               error=error)
-        res.wall = time.perf_counter() - t0
-        log(f"{key:<15} {res.verdict:<14} {res.wall:6.1f} s")
-        results.append(res)
+    with ctx.shared_cluster():   # one LocalCluster for every simulated sweep
+        for key, draw in FIGURES.items():
+            if only and key not in only:
+                continue
+            t0 = time.perf_counter()
+            try:
+                res = draw(ctx)
+            except Exception as exc:  # noqa: BLE001 -- one figure must not sink the page
+                error = f"{type(exc).__name__}: {exc}"
+                res = FigureResult(key, key, "", "(the figure could not be computed)",
+                                   ctx.png(key), [Check("computation", error, "runs", False)],
+                                   error=error)
+            res.wall = time.perf_counter() - t0
+            log(f"{key:<15} {res.verdict:<14} {res.wall:6.1f} s")
+            results.append(res)
     write_page(results, ctx)
     return results

@@ -2,6 +2,7 @@
 which its scene sweeps run (so a later ``ditherlab map --scene`` finds them)."""
 from __future__ import annotations
 
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -26,6 +27,9 @@ class Context:
     model: dict = field(default_factory=dict)
     #: overrides for the averaged theory only (e.g. a perturbed g: ``{"fs": 1.6}``)
     theory: dict = field(default_factory=dict)
+
+    #: set by :meth:`shared_cluster`: where the gallery's own cluster is kept open
+    _stack: ExitStack | None = field(default=None, repr=False)
 
     def __post_init__(self):
         check_size(self.size)
@@ -76,11 +80,32 @@ class Context:
             spec["name"] += "-wrong-model"
         return spec
 
+    @contextmanager
+    def shared_cluster(self):
+        """Within it, the first simulated sweep starts a LocalCluster of ``workers`` that
+        every later sweep reuses (Fig. 14 and its lam = 0.5 twin: one cluster start and one
+        kernel compilation on the workers, not one per sweep); closed on leaving. Without a
+        simulated sweep no cluster starts. An existing ``client`` is used as it is."""
+        own = self.client is None
+        with ExitStack() as stack:
+            self._stack = stack if own else None
+            try:
+                yield self
+            finally:
+                self._stack = None
+                if own:
+                    self.client = None
+
     def sweep(self, scene: str):
         """Run (or reuse) the scene's sweep at this size; its cube as an xarray.Dataset."""
         from ..api import open_sweep, run_sweep
 
-        res = run_sweep(self.spec(scene), self.store, client=self.client,
+        spec = self.spec(scene)
+        if self.client is None and self._stack is not None and spec.get("method") == "simulate":
+            from ..workers.cluster import dask_client
+
+            self.client = self._stack.enter_context(dask_client(None, self.workers))
+        res = run_sweep(spec, self.store, client=self.client,
                         workers=self.workers, progress=self.progress)
         if res.state != "done":
             raise RuntimeError(f"scene {scene} ({self.size}): sweep {res.sweep_id} ended "

@@ -55,15 +55,15 @@ WRONG = {
     "fig17": ("dither amplitude cut tenfold", {"W_scale": 0.1}, {}),
     "beyond_sine": ("averaged theory with a wrong Stribeck velocity (vs 1)", {}, {"vs": 1.0}),
 }
-#: trajectory figures: seconds to a minute each
-SLOW = {"fig06", "fig08", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16", "fig17"}
+#: trajectory figures: 3-20 s each (docs/GALLERY.md), long: CI runs them (`-m long`)
+LONG = {"fig06", "fig08", "fig10", "fig11", "fig12", "fig13", "fig15", "fig16", "fig17"}
 
 
 def test_every_paper_figure_but_the_sweep_ones_has_a_wrong_model():
     assert set(WRONG) == set(CORRECT) == set(FIGURES) - {"fig14", "beyond_scaling"}
 
 
-@pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.slow) if k in SLOW else k
+@pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.long) if k in LONG else k
                                  for k in WRONG])
 def test_the_rule_fails_on_a_wrong_model(key, tmp_path):
     what, model, theory = WRONG[key]
@@ -74,7 +74,8 @@ def test_the_rule_fails_on_a_wrong_model(key, tmp_path):
     assert res.verdict != HOLDS or CORRECT[key][0] != HOLDS, (key, what)
 
 
-@pytest.mark.slow
+@pytest.mark.long   # two refined dask sweeps, about a minute
+@pytest.mark.timeout(2400)
 def test_fig14_rule_fails_without_the_elastic_stick(tmp_path):
     """lam = z_ba/z_ss cut to 0.05 (nearly LuGre): long stick leaves most of the plane, and
     the zone's boundary no longer grows with W as Fig. 14's does."""
