@@ -2,6 +2,13 @@
 
     .venv/bin/python scripts/bit_identical.py record out/bits-before.npz     # before the change
     .venv/bin/python scripts/bit_identical.py compare out/bits-before.npz    # after it
+    .venv/bin/python scripts/bit_identical.py diff before.npz after.npz      # two records
+
+To record the code before a change, run this script with the ``PYTHONPATH`` of a worktree of
+that commit (``git worktree add /tmp/bits-before <commit>``; ``PYTHONPATH=/tmp/bits-before
+.venv/bin/python /tmp/bits-before/scripts/bit_identical.py record ...``): the editable install's
+finder comes after ``PYTHONPATH`` and the local dask workers inherit it. The first line printed
+names the folder the packages were imported from.
 
 What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
 
@@ -179,21 +186,34 @@ def compare(before: dict, after: dict) -> int:
     return 1 if bad else 0
 
 
+def _load(path: Path) -> dict:
+    with np.load(path) as npz:
+        return {k: npz[k] for k in npz.files}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("action", choices=("record", "compare"))
+    ap.add_argument("action", choices=("record", "compare", "diff"))
     ap.add_argument("file", type=Path)
+    ap.add_argument("other", type=Path, nargs="?", help="diff: the second record")
     ap.add_argument("--quick", action="store_true", help="every third grid value of each spec")
     args = ap.parse_args()
+    if args.action == "diff":
+        if args.other is None:
+            ap.error("diff takes two records")
+        return compare(_load(args.file), _load(args.other))
+    import engine
+    import sweeps
+
+    print(f"code from {Path(engine.__file__).parent.parent} "
+          f"(sweeps from {Path(sweeps.__file__).parent.parent})", flush=True)
     found = collect(args.quick)
     if args.action == "record":
         args.file.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.file, **found)
         print(f"recorded {len(found)} arrays in {args.file}")
         return 0
-    with np.load(args.file) as npz:
-        before = {k: npz[k] for k in npz.files}
-    return compare(before, found)
+    return compare(_load(args.file), found)
 
 
 if __name__ == "__main__":
