@@ -37,7 +37,8 @@ def runnable_blocks() -> list:
         for k, m in enumerate(FENCE.finditer(page.read_text())):
             indent, slow, lang, body = m.groups()
             code = "".join(line[len(indent):] for line in body.splitlines(keepends=True))
-            marks = [pytest.mark.slow] if slow else []
+            # every block runs ditherlab (seconds each): long, or a slow study
+            marks = [pytest.mark.slow] if slow else [pytest.mark.long]
             params.append(pytest.param(lang, code, id=f"{page.relative_to(ROOT)}-{k}-{lang}",
                                        marks=marks))
     return params

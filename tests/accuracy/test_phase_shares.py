@@ -53,6 +53,7 @@ def _ref(case):
     return {out: np.asarray(REFS[case]["shares"][key]) for out, key in KEYS.items()}
 
 
+@pytest.mark.long
 def test_share_above_is_exact_for_quadratics():
     assert share_above(0.0, 0.5, 1.0, 0.25) == pytest.approx(0.75, abs=1e-15)
     assert share_above(1.0, 1.0, 1.0, 0.5) == 1.0 and share_above(0.0, 0.0, 0.0, 0.5) == 0.0

@@ -64,6 +64,7 @@ def reference():
     return dp5
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("level", LEVELS)
 def test_run_outputs_keep_their_promise(reference, level):
     plan = make_plan(parse_spec(SPEC), level)

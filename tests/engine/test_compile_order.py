@@ -19,6 +19,7 @@ import textwrap
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from ..sweeps.conftest import SIMULATE_SPEC as SPEC   # 8 points, LuGre, square dither, draft
 
@@ -54,6 +55,7 @@ def _blocks(tmp_path, cache, out) -> dict:
         return {k: z[k] for k in z.files}
 
 
+@pytest.mark.long
 def test_block_bits_do_not_depend_on_what_the_disk_cache_held(tmp_path):
     cache = tmp_path / "cache"
     fresh = _blocks(tmp_path, cache, tmp_path / "fresh.npz")      # everything compiled here
@@ -89,6 +91,7 @@ print(norm2(np.random.default_rng(0).random(1000)).hex())
 """
 
 
+@pytest.mark.long
 def test_a_contracted_function_does_not_depend_on_compilation_order(tmp_path):
     """The numba-level mechanism, in isolation (no disk cache involved)."""
     script = tmp_path / "mini.py"

@@ -5,6 +5,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 PROBE = """
 import json, time, numpy as np
 from engine import params as P
@@ -77,6 +79,7 @@ def run_pair(cache_dir, *orders) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.long
 def test_kernels_cached_by_different_processes_do_not_collide(tmp_path):
     """Two closures of one factory compiled in two processes get the same per-process
     function counter; numba names machine code by qualified name + counter, so without

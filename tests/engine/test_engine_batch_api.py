@@ -48,6 +48,7 @@ def test_bad_points_get_a_status_not_an_exception():
     assert np.all(failed.status == S.FAILED) and np.all(failed.steps + failed.rejected <= 20)
 
 
+@pytest.mark.long
 def test_rk4_counts_four_evaluations_per_step():
     res = run_block(scene(integrator="rk4"), POINTS[:1], P.pack(t_end=0.5),
                     Settings(steps_per_period=4))

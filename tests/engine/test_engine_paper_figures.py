@@ -68,6 +68,7 @@ def _sec7(W):
     return o, r.alpha_hist[-2:].sum()
 
 
+@pytest.mark.long
 def test_sec7_dither_breaks_long_sticks_and_slip_share_grows():
     o0, slip0 = _sec7(0.0)
     assert 0.5 < o0["stick_fraction"] / slip0 < 2.0          # Fig. 12(b)

@@ -31,6 +31,7 @@ CASES = [  # dither, parameters: stick-slip without dither (|u| = 0 kinks), and 
 ]
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("method", sorted(METHODS))
 @pytest.mark.parametrize("dither,kw", CASES, ids=[c[0] for c in CASES])
 def test_samples_match_reference_at_instants(method, dither, kw):
@@ -46,6 +47,7 @@ def test_samples_match_reference_at_instants(method, dither, kw):
     assert err.max() < tol, (method, dither, err.max())
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_sampling_does_not_touch_the_trajectory(method):
     settings, _ = METHODS[method]

@@ -36,6 +36,7 @@ CASES = [
 ]
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("law,dither,kw,y0", CASES, ids=[f"{c[0]}-{c[1]}" for c in CASES])
 def test_matches_dop853(law, dither, kw, y0):
     p = P.pack(t_end=T_END, e0=y0[0], v0=y0[1], z0=y0[2], **kw)

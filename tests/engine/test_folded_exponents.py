@@ -26,6 +26,7 @@ OUT = ("v_mean", "F_mean", "stick_fraction")
     ("contact", "elastoplastic", "sine-velocity",                            # delta = 1
      P.pack(P.CONTACT_DEFAULTS, W=2e-3, omega=2e3, t_end=0.02, t_transient=0.005)),
 ])
+@pytest.mark.long
 @pytest.mark.parametrize("integrator", ["rk4", "dopri5"])
 def test_folded_kernel_matches_the_run_time_one(system, friction, dither, p, integrator):
     folded = Scene.from_params(p, system=system, friction=friction, dither=dither,

@@ -89,6 +89,7 @@ def test_shrink_keeps_the_ends():
     assert shrink({"start": 0.0, "stop": 1.0, "num": 81}, 5)["num"] == 5
 
 
+@pytest.mark.long
 def test_map_pick_draws_a_handful_of_w_curves(tmp_path, capsys):
     """--pick N and repeated --sel W=... on an averaged cube (small demo spec, a second)."""
     store = str(tmp_path / "store")

@@ -14,6 +14,7 @@ from sweeps.gallery import reference as R
 V = np.linspace(-1.2, 1.2, 97)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("vd", [0.1, 0.01])
 def test_sine_average_is_converged_and_equals_scipy_quad(vd):
     p = {**R.SEC5, "vd": vd}

@@ -63,6 +63,7 @@ def test_every_paper_figure_but_the_sweep_ones_has_a_wrong_model():
     assert set(WRONG) == set(CORRECT) == set(FIGURES) - {"fig14", "beyond_scaling"}
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("key", [pytest.param(k, marks=pytest.mark.long) if k in LONG else k
                                  for k in WRONG])
 def test_the_rule_fails_on_a_wrong_model(key, tmp_path):

@@ -51,6 +51,7 @@ def test_no_stribeck_effect_fs_equals_fc():
     agree(coarse, fine, ("v_mean", "F_mean"))
 
 
+@pytest.mark.long
 def test_bristle_state_starting_exactly_at_breakaway():
     """Elasto-plastic z(0) = z_ba(u(0)) = lam g(u) / sigma0 exactly (Eq. 2.6's corner between
     sticking and pre-sliding), sliding at u = v0 = v_ref = 0.1."""
@@ -97,6 +98,7 @@ def test_sticking_for_the_whole_run():
     agree(coarse, fine, ("v_mean", "F_mean"))
 
 
+@pytest.mark.long
 def test_interface_velocity_hovering_at_zero_does_not_stall():
     """Regression: elasto-plastic slider under sine dither (Fig. 14 grid point W = 1,
     omega = 2000). At tau = 26.4459 u = v + W sin(omega tau) sits at -6.6e-13; a kink

@@ -6,6 +6,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 CYCLE = """
 import sys
@@ -33,6 +35,7 @@ store.friction_curves(ds, root + "/curves.png", sel={{"v_d": 0.1}})
 """
 
 
+@pytest.mark.long
 def test_store_cycle_runs_with_numba_dask_engine_sweeps_blocked(tmp_path):
     code = CYCLE.format(root=str(ROOT), here=str(Path(__file__).parent))
     proc = subprocess.run(

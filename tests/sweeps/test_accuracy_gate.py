@@ -54,6 +54,7 @@ def test_sample_is_stratified_deterministic_and_has_the_corners():
     assert np.array_equal(small, np.arange(6))                 # a small grid: every point
 
 
+@pytest.mark.long
 def test_loose_numerics_warn_in_cube_status_and_query(tmp_path, spec_file):
     root = tmp_path / "store"
     ditherlab("submit", str(spec_file(LOOSE_SPEC)), "--quiet", store=root, check=True)

@@ -128,6 +128,7 @@ def test_unknown_sweep_and_bad_selection(tmp_path, spec_file):
     assert proc.returncode == 2 and "AXIS=VALUE" in proc.stderr
 
 
+@pytest.mark.long
 def test_harmonic_balance_sweep_fig1_loop_grows_then_shrinks(tmp_path):
     """method = "hbm" through the service on the Sec. 3 contact model (Fig. 1 parameters):
     the loop area first grows with frequency, then shrinks (Sec. 3, Fig. 1), and no point is

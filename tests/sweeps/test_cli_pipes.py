@@ -4,9 +4,12 @@ import importlib
 import subprocess
 import sys
 
+import pytest
+
 from .conftest import BIN
 
 
+@pytest.mark.long
 def test_a_reader_that_stops_early_gets_no_error_line():
     """`scenes` writes more than head reads: the broken pipe is near certain (it was the
     CI failure of stop 25, "ditherlab: Broken pipe"); exit 0 under pipefail either way."""

@@ -28,6 +28,7 @@ def shelf(tmp_path_factory):
     return root
 
 
+@pytest.mark.long
 def test_json_keeps_full_precision_and_says_inf(shelf):
     """pandas' to_json rounded W = 1e-11 to 0.0 and wrote omega = inf as null."""
     rows = json.loads(ditherlab("query", "tiny", "--format", "json", store=shelf / "store",
@@ -70,6 +71,7 @@ def test_a_sweep_folder_under_another_name_says_how_to_put_it_back(shelf, tmp_pa
                            f"another name; `mv {root / 'archive'} {root / tiny}` puts it back\n")
 
 
+@pytest.mark.long
 def test_the_same_spec_under_a_second_name_keeps_the_first(shelf, tmp_path):
     root = tmp_path / "store"
     shutil.copytree(shelf / "store", root)
@@ -135,6 +137,7 @@ def test_plan_of_fewer_blocks_than_workers_is_not_shared_among_them():
     assert est.wall_s == pytest.approx(est.per_point_s + TASK_OVERHEAD_S, rel=1e-12)
 
 
+@pytest.mark.long
 def test_cancel_finds_a_sweep_as_query_does(shelf, tmp_path):
     """Two current sweeps of one name: query and cancel refuse alike (exit 2, the ids
     listed); cancel of the name once it is unique says the sweep is done."""
@@ -161,6 +164,7 @@ def test_plan_record_into_a_file_is_refused_like_every_command(tmp_path):
                            "--store DIR (or set $DITHERLAB_STORE) naming a folder\n")
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("kind, sel, axis", [("stick-slip", "W=0.5", "W"),
                                              ("stability", "v_ref=0.5", "v_ref"),
                                              ("stability", "W=0.5", "W")])

@@ -29,6 +29,7 @@ def _check(fc, trials) -> None:
     assert all(t.bad_reads == 0 for t in trials) and sum(t.reads for t in trials) > 0, table
 
 
+@pytest.mark.long
 def test_a_kill_after_the_last_block_is_survived(tmp_path):
     """8 blocks of 2 points, killed once every block is journaled: the window where the next
     submit used to say 'already complete' over a half-empty cube. (~1 min: one kill; a kill

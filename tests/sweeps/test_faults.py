@@ -112,6 +112,7 @@ def read_only(tmp_path):
 
 # --- 1, 2: the cube disagrees with the journal ------------------------------------------
 
+@pytest.mark.long
 def test_a_stale_cube_with_a_complete_journal_is_republished(avg, tmp_path):
     """The state a submitter killed after its last journal write and before its final
     publish leaves (measured: 'done, already complete; 256/256 ok' over 152 points of
@@ -132,6 +133,7 @@ def test_a_stale_cube_with_a_complete_journal_is_republished(avg, tmp_path):
     assert "republished" not in again.stderr       # now they agree: nothing written
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("damage", ["truncate", "garbage", "delete"])
 def test_a_damaged_cube_is_named_by_query_and_repaired_by_submit(avg, tmp_path, damage):
     path, spec, clean = avg
@@ -160,6 +162,7 @@ def test_a_damaged_cube_is_named_by_query_and_repaired_by_submit(avg, tmp_path, 
 
 # --- 3: disk full ----------------------------------------------------------------------
 
+@pytest.mark.long
 def test_disk_full_before_anything_is_one_line_not_a_segfault(avg, tmpfs):
     """Measured before: 'RuntimeError: Disable slist on flush dest failure failed ... No
     space left on device', then Segmentation fault (exit 139) on a 200 KB tmpfs."""
@@ -177,6 +180,7 @@ def test_disk_full_before_anything_is_one_line_not_a_segfault(avg, tmpfs):
                                 _results(_cube(clean, spec)))
 
 
+@pytest.mark.long
 def test_disk_full_keeps_the_previous_cube_and_resumes_when_freed(avg, tmpfs):
     path, spec, clean = avg
     root = tmpfs("2m") / "store"
@@ -268,6 +272,7 @@ def test_bad_journal_blocks_are_set_aside_and_recomputed(avg, tmp_path):
 
 # --- 5: store paths, read-only stores, a damaged catalogue, Ctrl-C ----------------------
 
+@pytest.mark.long
 def test_read_commands_work_on_a_read_only_store_and_submit_says_why_not(avg, tmp_path,
                                                                           read_only):
     """Measured before: sqlite3.OperationalError for status and query on a read-only mount."""
@@ -304,6 +309,7 @@ def test_an_unusable_store_path_is_one_line_and_exit_2(tmp_path, spec_file, case
         assert len(lines[0]) < 300
 
 
+@pytest.mark.long
 def test_a_damaged_catalogue_is_one_line_saying_how_to_rebuild_it(avg, tmp_path):
     path, spec, clean = avg
     root = tmp_path / "damaged"
@@ -323,6 +329,7 @@ def test_a_damaged_catalogue_is_one_line_saying_how_to_rebuild_it(avg, tmp_path)
     assert spec.sweep_id in ditherlab("status", store=root, check=True).stdout
 
 
+@pytest.mark.long
 def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_file, env,
                                                                 gate):
     """SIGINT to the whole process group, as a terminal's Ctrl-C: exit 130, one line, no

@@ -9,6 +9,7 @@ Engine edits are simulated on a copy of the engine tree or by monkeypatching
 import shutil
 import sqlite3
 
+import pytest
 import xarray as xr
 
 from engine import jit, provenance
@@ -152,6 +153,7 @@ print(json.dumps(sorted(set(sys.modules) - before)))
 """
 
 
+@pytest.mark.long
 def test_the_computing_path_holds_every_module_a_run_loads(tmp_path):
     import json
     import subprocess

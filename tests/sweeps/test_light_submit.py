@@ -8,11 +8,14 @@ import json
 import subprocess
 import sys
 
+import pytest
+
 from .conftest import AVERAGED_SPEC
 
 HEAVY = ("xarray", "pandas", "dask.array", "distributed", "matplotlib")
 
 
+@pytest.mark.long
 def test_an_averaged_submit_imports_no_xarray_pandas_dask_or_matplotlib(tmp_path, spec_file):
     path = spec_file(AVERAGED_SPEC)
     code = ("import json, sys\n"

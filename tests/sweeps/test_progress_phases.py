@@ -5,6 +5,8 @@ estimate's finer re-runs counted ``k/N``, then publishing the cube; it no longer
 through (tqdm redraws with a carriage return), not on their timing."""
 import re
 
+import pytest
+
 from sweeps.planning.plan import make_plan
 from sweeps.run.submit import submit
 from sweeps.estimates.error_reruns import SampleRuns
@@ -30,6 +32,7 @@ def _count(state: str) -> tuple[int, int]:
     return int(k), int(n)
 
 
+@pytest.mark.long
 def test_a_submit_names_its_phases_in_order(tmp_path, capfd):
     plan = make_plan(parse_spec(SPEC))
     n_rerun = len(SampleRuns(plan).order)

@@ -127,6 +127,7 @@ def test_refined_fig09_at_400x400_labels_every_cell_as_the_full_grid(tmp_path):
     assert (ref["provenance"].values == 0).mean() < 0.2
 
 
+@pytest.mark.long
 def test_refined_zone_map_equals_the_full_grid(tmp_path):
     full, ref = _pair(ZONES, tmp_path)
     np.testing.assert_array_equal(store.zone_map(ref).values, store.zone_map(full).values)
@@ -134,6 +135,7 @@ def test_refined_zone_map_equals_the_full_grid(tmp_path):
     assert "provenance" in store.table(ref).columns
 
 
+@pytest.mark.long
 def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path, env, gate):
     """Killed (SIGKILL) once a block of its first level is journaled, with three tasks let
     through the gate (blocks, or the error sample's re-runs that fill idle workers) and the
@@ -166,6 +168,7 @@ def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path, env, gate):
     assert_same_results(a, b)   # provenance, steps and every output included
 
 
+@pytest.mark.long
 def test_values_read_from_inferred_points_carry_a_warning(tmp_path):
     """A refined cube's inferred points hold a computed neighbour's outputs (right class,
     not a computed value): ``query`` and ``map --kind friction`` say so in one warning

@@ -42,6 +42,7 @@ def test_every_mutation_breaks_what_it_says(mutate, tmp_path):
     assert res["faults"] == [], (case, res.get("lines"))
 
 
+@pytest.mark.long
 @settings(max_examples=60, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(st.sampled_from(MUTATIONS), st.sampled_from(range(len(BASES))),

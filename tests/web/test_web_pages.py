@@ -148,6 +148,7 @@ def test_a_gallery_folder_is_served_by_name_only(web_store, serve_ctx, tmp_path)
     assert request(serve_ctx(Context(web_store["root"])), "/gallery/")[0] == 404
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("drawn", [True, False])
 def test_the_drawing_process_ends_with_a_killed_server(web_store, drawn):
     """Killed after drawing a map, or at once (the drawing process still starting: it
