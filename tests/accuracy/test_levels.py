@@ -59,6 +59,7 @@ def level_errors(reference):
     return errs
 
 
+@pytest.mark.long
 def test_levels_are_ordered(level_errors):
     assert level_errors["draft"] > level_errors["standard"] > level_errors["reference"]
 

@@ -65,6 +65,7 @@ def test_share_above_is_exact_for_quadratics():
         assert share_above(r0, rm, r1, thr) == pytest.approx(np.mean(q >= thr), abs=2e-6)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("level", ["draft", "standard", "reference"])
 def test_undithered_shares_meet_every_level(level):
     """The measured defect: slip 0.081 / 0.096 / 0.350 at draft / standard / reference."""
@@ -94,6 +95,7 @@ def test_near_slip_is_well_conditioned_at_loose_tolerance():
     assert abs(loose.outputs["slip_fraction"][0] - ref["slip_fraction"]) > 1e-2  # why slip needs PHASE_LEVELS
 
 
+@pytest.mark.long
 def test_sine_dither_shares_meet_standard():
     """Sec. 7 with sine-velocity dither W = 1, omega = 300 (window [20, 100])."""
     case = REFS["sine_W1_w300"]

@@ -53,6 +53,7 @@ def test_exact_reference_sticks(exact):
     assert shares[0] > 0.3 and shares[1] > 0.2     # a case that sticks a third of the time
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("level", LEVELS)
 def test_level_keeps_its_promise_on_stick(exact, level):
     law, shares = exact

@@ -151,6 +151,7 @@ def test_bad_arguments():
         contact_hbm(VM, VA, 1.0, PC, n_eval=101)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("omega", [100.0, 3000.0])
 def test_hbm_matches_the_engines_contact_system(omega):
     """The engine's own time integration of the contact system (engine.api.simulate,

@@ -33,6 +33,7 @@ def run_probe(cache_dir) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.long
 def test_second_process_loads_the_kernel_from_disk(tmp_path):
     first = run_probe(tmp_path)
     second = run_probe(tmp_path)

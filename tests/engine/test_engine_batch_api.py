@@ -19,6 +19,7 @@ P_SHORT = P.pack(t_end=0.5, t_transient=0.1)
 POINTS = np.array([[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.4, 0.01]])
 
 
+@pytest.mark.long
 def test_block_contract_and_point_overrides():
     res = run_block(scene(), POINTS, P_SHORT, Settings(rtol=1e-8, atol=1e-10))
     assert isinstance(res, BlockResult) and POINT_AXES == ("W", "omega", "v_ref", "vd")

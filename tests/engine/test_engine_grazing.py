@@ -48,6 +48,7 @@ def reference():
     return exact_F_mean()
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("method", ["dopri5", "rodas4"])
 def test_band_dips_are_landed_on_and_F_mean_follows_the_tolerance(method, reference):
     scene = Scene.from_params(PARAMS, system="contact", friction="stribeck",

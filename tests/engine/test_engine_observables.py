@@ -25,6 +25,7 @@ def _t_ba():
     return c["lam"] * R.g(U, c) / (c["sigma0"] * U)
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("t_tr,long_stick", [(0.0, 5e-3), (5e-3, 1e-3), (0.0, 0.012)])
 def test_elastoplastic_stick_run_is_exact(t_tr, long_stick):
     t_end, t_ba = 0.02, _t_ba()
@@ -49,6 +50,7 @@ def test_elastoplastic_stick_run_is_exact(t_tr, long_stick):
     ("sine-force", {"W": 0.3, "omega": 100.0}),
     ("none", {}),
 ])
+@pytest.mark.long
 def test_window_means_and_period_average_match_reference(dither, kw):
     t_tr, t_end = 0.5, 2.0
     p = P.pack(v_ref=0.4, t_end=t_end, t_transient=t_tr, **kw)

@@ -52,6 +52,7 @@ def test_matches_dop853(law, dither, kw, y0):
     assert abs(r.outputs["F_mean"] - ref[3] / T_END) < 1e-8
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("law", ["stribeck", "coulomb"])
 def test_static_law_stick_slip_matches_exact_sticking(law):
     t_end, band = 40.0, 1e-6

@@ -24,6 +24,7 @@ from engine.systems import make_system
 from .hardcases import REFS, error_units, run
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("rtol", [1e-4, 1e-6])
 def test_natural_units_control_the_stiff_bristle(rtol):
     c, q_ref = REFS["sigma0_1e6"]["params"], np.array(REFS["sigma0_1e6"]["q"])
@@ -43,6 +44,7 @@ def test_natural_scales_of_the_slider():
     assert out[1] == 0.4
 
 
+@pytest.mark.long
 def test_absolute_units_keep_one_atol_and_bad_units_are_refused():
     cfg = make_config(Settings(atol=3e-9))
     assert (cfg[0]["atol_i"][:3] == 3e-9).all()

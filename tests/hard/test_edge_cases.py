@@ -81,6 +81,7 @@ def test_interface_velocity_zero_exactly_at_a_switch():
     agree(coarse, fine, ("v_mean", "F_mean"))
 
 
+@pytest.mark.long
 def test_sticking_for_the_whole_run():
     """Elasto-plastic from rest, v_ref = 1e-3, no slow force, t_end = 10: the spring force
     e <= v_ref t_end = 0.01 never approaches breakaway (lam fs = 1.2), so |z| stays below

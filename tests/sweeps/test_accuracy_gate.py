@@ -84,6 +84,7 @@ def test_loose_numerics_warn_in_cube_status_and_query(tmp_path, spec_file):
     assert "slip_fraction: changed by" in query.stderr
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("level", ["standard"])
 def test_a_converged_sweep_has_no_warning(tmp_path, spec_file, level):
     root = tmp_path / "store"

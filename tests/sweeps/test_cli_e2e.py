@@ -39,6 +39,7 @@ def check_layout(cube_path, spec, outputs):
         ds.close()
 
 
+@pytest.mark.long
 def test_simulated_sweep_end_to_end(tmp_path, spec_file):
     store = tmp_path / "store"
     path = spec_file(SIMULATE_SPEC)
@@ -83,6 +84,7 @@ def test_averaged_sweep_and_maps(tmp_path, spec_file):
         assert img.shape[0] >= 400 and img.shape[1] >= 600 and img.std() > 0.01
 
 
+@pytest.mark.long
 def test_stick_slip_map_png(tmp_path, spec_file):
     store = tmp_path / "store"
     path = spec_file(SIMULATE_SPEC.replace('friction = "lugre"', 'friction = "elastoplastic"')

@@ -116,6 +116,7 @@ def test_open_sweep_is_lazy_with_chunks(avg_store):
         np.testing.assert_array_equal(lazy["F_eff"].values, eager["F_eff"].values)
 
 
+@pytest.mark.long
 def test_run_sweep_takes_a_spec_and_an_existing_client(tmp_path):
     """A Spec object and a caller's dask.distributed.Client (left open after the run)."""
     from distributed import Client, LocalCluster

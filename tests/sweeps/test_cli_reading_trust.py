@@ -96,6 +96,7 @@ def test_the_same_spec_under_a_second_name_keeps_the_first(shelf, tmp_path):
     assert ",0.5," in ditherlab("query", "bob", "--format", "csv", store=root, check=True).stdout
 
 
+@pytest.mark.long
 def test_a_w_curve_off_the_grid_is_refused_and_inferred_picks_warn(tmp_path):
     spec = tmp_path / "ref.toml"
     spec.write_text(AVERAGED_SPEC.replace('name = "e2e-avg"', 'name = "ref"\nrefine = true'))

@@ -204,6 +204,7 @@ def test_disk_full_keeps_the_previous_cube_and_resumes_when_freed(avg, tmpfs):
     xr.testing.assert_identical(_results(cube), _results(_cube(clean, spec)))
 
 
+@pytest.mark.long
 def test_disk_filling_up_mid_run_stops_with_one_line_and_resumes(tmp_path, spec_file, tmpfs,
                                                                   env, gate):
     """A 32-block simulated sweep; another process fills the disk after 3 blocks (the

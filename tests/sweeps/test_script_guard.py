@@ -8,6 +8,8 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = ('{"name": "guard", "friction": "lugre", "dither": "none", "outputs": ["F_mean"], '
         '"accuracy": "draft", "time": {"t_end": 2.0, "t_transient": 1.0}, '
@@ -36,6 +38,7 @@ def test_unguarded_script_is_refused_in_one_line(tmp_path):
     assert out.stderr.strip().splitlines()[-1].startswith("sweeps.workers.cluster.ClusterStartError")
 
 
+@pytest.mark.long
 def test_guarded_script_runs(tmp_path):
     out = _run(tmp_path, """\
         if __name__ == "__main__":
