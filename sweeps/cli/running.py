@@ -20,6 +20,7 @@ def cmd_submit(args) -> int:
     import store
 
     from ..planning.plan import make_plan
+    from ..run.interrupt import remembered
     from ..run.submit import submit
 
     spec = _load(args)
@@ -31,8 +32,9 @@ def cmd_submit(args) -> int:
     if args.detach:
         return _submit_detached(plan, root)
     try:
-        res = submit(plan, root, scheduler=args.scheduler, workers=_workers(args),
-                     progress=not args.quiet, dashboard=args.dashboard)
+        with remembered():   # a Ctrl-C is never swallowed by a dask callback
+            res = submit(plan, root, scheduler=args.scheduler, workers=_workers(args),
+                         progress=not args.quiet, dashboard=args.dashboard)
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; {_kept(plan, root)}; "
                           "submit the spec again to resume") from None

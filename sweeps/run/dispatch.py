@@ -17,7 +17,7 @@ from ..workers.cluster import dask_client
 from ..workers.matching import matched
 from ..planning.plan import Plan, blocks_per_task
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
-from . import phases
+from . import interrupt, phases
 from .sink import BlockSink
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
@@ -68,6 +68,7 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
     thread.start()
     while thread.is_alive():
         thread.join(0.25)
+        interrupt.check()
         if thread.is_alive() and sink.should_stop():
             return False
     if "error" in outcome:
@@ -119,6 +120,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             pass
 
     while True:
+        interrupt.check()   # a Ctrl-C that a dask callback swallowed (sweeps.run.interrupt)
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             _resubmit_orphans(client, inflight, good, queue)

@@ -1,0 +1,46 @@
+"""A Ctrl-C that is never lost.
+
+Python raises KeyboardInterrupt wherever the main thread happens to be when SIGINT
+arrives. When that is inside a weakref callback or a ``__del__`` (dask's futures and
+clients run many), the exception is printed as "Exception ignored in ..." and dropped,
+and a submitter runs on as if nobody had pressed Ctrl-C (seen under load in
+tests/sweeps/test_service.py's Ctrl-C test). :func:`remembered` installs a SIGINT handler
+that notes the signal before raising; the dispatch loop calls :func:`check` every tick,
+which raises it again if it was swallowed. Installed only over Python's default handler
+(``serve`` has its own: the first SIGINT stops gracefully, sweeps.service).
+"""
+from __future__ import annotations
+
+import signal
+import threading
+from contextlib import contextmanager
+
+_pressed = threading.Event()
+
+
+def _note_and_raise(signum, frame):
+    _pressed.set()
+    raise KeyboardInterrupt
+
+
+@contextmanager
+def remembered():
+    """While inside, a SIGINT that something swallowed is raised again by :func:`check`."""
+    main = threading.current_thread() is threading.main_thread()
+    if not main or signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    _pressed.clear()
+    previous = signal.signal(signal.SIGINT, _note_and_raise)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _pressed.clear()
+
+
+def check() -> None:
+    """Raise KeyboardInterrupt if a SIGINT arrived (and was swallowed) since the last check."""
+    if _pressed.is_set():
+        _pressed.clear()
+        raise KeyboardInterrupt
