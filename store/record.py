@@ -96,13 +96,17 @@ class BlockRecord:
                    outputs={k: v for k, v in arrays.items() if k not in FIELDS})
 
     @classmethod
-    def failed(cls, index, outputs: Sequence[str], error: str, status: int,
-               fingerprint: str | None = None) -> BlockRecord:
-        """A block whose computation raised: every point ``status``, outputs NaN."""
+    def failed(cls, index, outputs: Sequence[str] | Mapping[str, tuple], error: str,
+               status: int, fingerprint: str | None = None) -> BlockRecord:
+        """A block whose computation raised: every point ``status``, outputs NaN.
+        ``outputs``: the names, or name -> per-point shape (``(10,)`` for alpha_hist: a
+        vector output's NaN rows must have the cube's shape, or the block cannot be
+        filled in and the run stops)."""
         n = len(index)
+        shapes = outputs if isinstance(outputs, Mapping) else dict.fromkeys(outputs, ())
         return cls(index, np.full(n, status), np.zeros(n), np.zeros(n), np.zeros(n),
-                   {name: np.full(n, np.nan) for name in outputs}, error=error,
-                   fingerprint=fingerprint)
+                   {name: np.full((n, *shape), np.nan) for name, shape in shapes.items()},
+                   error=error, fingerprint=fingerprint)
 
     @classmethod
     def concatenate(cls, records: Sequence[BlockRecord]) -> BlockRecord:

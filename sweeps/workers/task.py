@@ -48,10 +48,18 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
     try:
         res = run_block(scene, points, p, settings)
     except Exception as exc:  # noqa: BLE001 -- one bad block must not end the sweep
-        return BlockRecord.failed(index, scene.outputs, f"{type(exc).__name__}: {exc}",
+        return BlockRecord.failed(index, output_shapes(scene.outputs),
+                                  f"{type(exc).__name__}: {exc}",
                                   S.FAILED, fingerprint=_fingerprint())
     return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs,
                        fingerprint=_fingerprint())
+
+
+def output_shapes(outputs) -> dict[str, tuple]:
+    """Each output's per-point shape: ``(N_HIST,)`` for the alpha_hist histogram, else ()."""
+    from engine.observables import N_HIST
+
+    return {name: (N_HIST,) if name == "alpha_hist" else () for name in outputs}
 
 
 def identity() -> dict:
