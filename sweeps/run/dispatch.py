@@ -112,7 +112,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                                   for group in groups],
                                  [plan.params] * n, [plan.numerics.settings] * n,
                                  [np.concatenate([plan.blocks[b] for b in group])
-                                  for group in groups], pure=False, workers=allowed)
+                                  for group in groups],
+                                 [[len(plan.blocks[b]) for b in group] for group in groups],
+                                 pure=False, workers=allowed)
             inflight.update((f, (group, frozenset(allowed))) for f, group in zip(futures, groups))
             done.update(futures)
         while filler is not None and good and not queue and \

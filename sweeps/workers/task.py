@@ -27,23 +27,28 @@ BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed blo
 
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
-                  index: np.ndarray | None = None) -> BlockRecord:
+                  index: np.ndarray | None = None, sizes=None) -> BlockRecord:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
     ``index``: the points' flat cube indices, carried into the record (default: their
-    positions in ``points``). The record's ``fingerprint`` is the results fingerprint of
+    positions in ``points``); ``sizes``: the points of each of the plan's blocks that
+    ``points`` holds one after another (a dask task may compute several:
+    sweeps.planning.plan.blocks_per_task; default one block), each passing the test gate
+    and noted in the block log once. The record's ``fingerprint`` is the results fingerprint of
     the process that computed it (the submitter journals a block only under its own:
     sweeps.run.sink).
 
     With ``$DITHERLAB_BLOCK_LOG`` set (inherited by local dask workers), appends one line
-    per call to that file: pid and :func:`block_key` (how the tests count block
+    per block to that file: pid and :func:`block_key` (how the tests count block
     computations across processes).
     """
     from engine.batch import run_block
 
-    if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
-        pass_gate(os.environ[GATE_ENV])
-    if os.environ.get(BLOCK_LOG_ENV):
-        _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points, settings))
+    starts = np.cumsum([0, *(sizes or [len(points)])])
+    for a, b in zip(starts[:-1], starts[1:]):   # per block
+        if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
+            pass_gate(os.environ[GATE_ENV])
+        if os.environ.get(BLOCK_LOG_ENV):
+            _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points[a:b], settings))
     index = np.arange(len(points)) if index is None else index
     try:
         res = run_block(scene, points, p, settings)

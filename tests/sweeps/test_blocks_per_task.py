@@ -28,7 +28,7 @@ def test_one_block_a_task_below_the_ceiling_more_beyond():
 TASK_POINTS: list[int] = []   # points of each task computed (the workers are threads here)
 
 
-def _instant(scene, points, p, settings, index):
+def _instant(scene, points, p, settings, index, sizes=None):
     """compute_block at once: every output is the point's omega (so a block's values tell
     which points it was given)."""
     TASK_POINTS.append(len(points))
