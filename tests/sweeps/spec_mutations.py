@@ -213,6 +213,15 @@ def m_duplicate(rng, base):
                 field=f"grid.{axis}")
 
 
+NUMERICS_OF_ANOTHER_INTEGRATOR = [  # (accuracy, the field named): a setting of another method
+    ({"integrator": "rk4", "steps_per_period": 8, "rtol": 1e-6}, "accuracy.rtol"),
+    ({"integrator": "rk4", "steps_per_period": 8, "atol": 1e-9}, "accuracy.atol"),
+    ({"integrator": "rk4", "steps_per_period": 8, "atol_units": "natural"}, "accuracy.atol_units"),
+    ({"integrator": "dopri5", "steps_per_period": 8}, "accuracy.steps_per_period"),
+    ({"integrator": "dopri5", "step": 1e-3}, "accuracy.step"),
+    ({"integrator": "rosenbrock", "step": 1e-3}, "accuracy.step"),
+]
+
 BAD_ACCURACY = [  # (accuracy, the field named)
     ({"integrator": "euler"}, "accuracy.integrator"),
     ({"integrator": ""}, "accuracy.integrator"),
@@ -220,12 +229,7 @@ BAD_ACCURACY = [  # (accuracy, the field named)
     ({"integrator": "dopri"}, "accuracy.integrator"),
     ({"integrator": 5}, "accuracy.integrator"),
     ({"integrator": None}, "accuracy.integrator"),
-    ({"integrator": "rk4", "steps_per_period": 8, "rtol": 1e-6}, "accuracy.rtol"),
-    ({"integrator": "rk4", "steps_per_period": 8, "atol": 1e-9}, "accuracy.atol"),
-    ({"integrator": "rk4", "steps_per_period": 8, "atol_units": "natural"}, "accuracy.atol_units"),
-    ({"integrator": "dopri5", "steps_per_period": 8}, "accuracy.steps_per_period"),
-    ({"integrator": "dopri5", "step": 1e-3}, "accuracy.step"),
-    ({"integrator": "rosenbrock", "step": 1e-3}, "accuracy.step"),
+    *NUMERICS_OF_ANOTHER_INTEGRATOR,
     ({"integrator": "rodas4", "steps_per_period": 4}, "accuracy.steps_per_period"),
     ({"integrator": "dopri5", "rtol": "1e-6"}, "accuracy.rtol"),
     ({"integrator": "rk4", "steps_per_period": 0}, "accuracy.steps_per_period"),

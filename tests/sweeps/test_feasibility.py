@@ -13,6 +13,8 @@ from sweeps.spec.accuracy import FIXED_H, FIXED_STEPS, RK4_WHERE, numerics
 from sweeps.planning.plan import make_plan
 from sweeps.spec import SpecError, SpecWarning, parse_spec
 
+from .spec_mutations import NUMERICS_OF_ANOTHER_INTEGRATOR
+
 # the Sec. 7 scene (specs/fig14.toml) at the point of issue 10: W = 1, omega = 3000
 SEC7 = {
     "name": "sec7", "friction": "elastoplastic", "dither": "sine-velocity",
@@ -98,12 +100,7 @@ def test_unknown_integrator_refused_with_the_allowed_names(name):
 
 
 @pytest.mark.parametrize("acc, field", [
-    ({"integrator": "rk4", "steps_per_period": 8, "rtol": 1e-6}, "accuracy.rtol"),
-    ({"integrator": "rk4", "steps_per_period": 8, "atol": 1e-9}, "accuracy.atol"),
-    ({"integrator": "rk4", "steps_per_period": 8, "atol_units": "natural"}, "accuracy.atol_units"),
-    ({"integrator": "dopri5", "steps_per_period": 8}, "accuracy.steps_per_period"),
-    ({"integrator": "dopri5", "step": 1e-3}, "accuracy.step"),
-    ({"integrator": "rosenbrock", "step": 1e-3}, "accuracy.step"),
+    *NUMERICS_OF_ANOTHER_INTEGRATOR,
     ({"integrator": "rk4", "step": 1e-3}, "accuracy.step"),                # with dither
 ])
 def test_ignored_options_refused(acc, field):
