@@ -1,5 +1,5 @@
-"""A cube as a file: :func:`publish` (atomic: the image made in memory with h5netcdf, free
-space checked, temporary file, fsync, rename), :func:`open_cube` (an ``xarray.Dataset``
+"""A cube as a file: :func:`publish` (atomic: a temporary file with its space reserved,
+written by store.netcdf_write, fsync, rename), :func:`open_cube` (an ``xarray.Dataset``
 fully in memory, a :class:`CubeError` that says how to repair an unreadable file),
 :func:`read_cube` (the same file as a :class:`store.cubedata.Cube`, without xarray),
 :func:`disagreement` between a published cube and one in memory, and :func:`cube_bytes`
@@ -9,13 +9,12 @@ The writer and :func:`read_cube` use h5netcdf directly: the file is what xarray'
 ``to_netcdf(engine="h5netcdf")`` wrote before (tests/test_cf.py checks it against CF-1.8):
 float variables and coordinates carry ``_FillValue = NaN``, integer ones none (with a
 fill value xarray would decode int8 flags as float, pydata/xarray#1576), data variables
-zlib level 1 with shuffle (HDF5's own chunks). Level 1 rather than 4: a publish is all
-compression, and level 1 is 1.4x faster on a real cube for 2 % more bytes (on noise-like
-values the same speed and size; docs/BATCH.md)."""
+zlib level 1 with shuffle (HDF5's own chunks, filtered in threads by store.netcdf_write).
+Level 1 rather than 4: a publish is all compression, and level 1 is 1.4x faster on a real
+cube for 2 % more bytes (on noise-like values the same speed and size; docs/BATCH.md)."""
 
 from __future__ import annotations
 
-import io
 from pathlib import Path
 
 import numpy as np
@@ -24,10 +23,9 @@ from . import attrs as A
 from .atomic import atomic_write, remove_stale_temps
 from .cube import AXES
 from .cubedata import Cube, Variable
-from .errors import StoreError
+from .errors import StoreError, ensure_space
 from .layout import SPEC_NAME
-
-COMPRESSION = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
+from .netcdf_write import space_bound, write_netcdf
 
 
 def _check_layout(ds, where: str) -> None:
@@ -48,10 +46,10 @@ def publish(ds, path) -> Path:
     atomically (temporary file, fsync, rename, fsync folder).
 
     A reader of ``path`` sees the previous file or the new one, never a torn file; a
-    writer killed before the rename leaves the old file intact. The netCDF image is
-    made in memory first, so HDF5 never meets a full disk (which it survives badly: a
-    failed flush inside HDF5 can end the process with a segmentation fault); free space
-    is checked before the temporary file is written, and a full disk raises
+    writer killed before the rename leaves the old file intact. The temporary file's
+    space is reserved before HDF5 writes it, so HDF5 never meets a full disk (which it
+    survives badly: a write failing inside HDF5 ends the process with a segmentation
+    fault; store.netcdf_write); a disk without that space raises
     ``store.errors.NoSpaceError`` with the previous cube untouched. Temporary files of
     dead writers in the same folder are removed first. Returns ``path``.
     """
@@ -60,31 +58,14 @@ def publish(ds, path) -> Path:
     _check_layout(cube, f"publish({path})")
     if path.parent.exists():
         remove_stale_temps(path.parent)
-    return atomic_write(path, netcdf_image(cube))
-
-
-def netcdf_image(cube: Cube) -> memoryview:
-    """The netCDF-4 file of ``cube``, made in memory (module docstring: the layout); a
-    view of the buffer, not a copy (the image of a 10^6-point cube is up to 137 MB)."""
-    import h5netcdf
-
-    buf = io.BytesIO()
-    with h5netcdf.File(buf, "w") as f:
-        f.attrs.update(A.encode(cube.attrs))
-        for name, var in cube.coords.items():
-            f.dimensions[name] = var.size
-        for name, var in cube.variables.items():
-            options = {} if name in cube.coords else COMPRESSION
-            fill = np.nan if var.dtype.kind == "f" else None
-            out = f.create_variable(name, var.dims, data=var.data, fillvalue=fill, **options)
-            out.attrs.update({k: v for k, v in var.attrs.items() if k != "_FillValue"})
-    return buf.getbuffer()
+    ensure_space(path, space_bound(cube))   # (the numbers for the message; reserve() is the guard)
+    return atomic_write(path, lambda tmp: write_netcdf(cube, tmp))
 
 
 def cube_bytes(ds) -> int:
-    """A generous size of ``ds`` as a published file: its values uncompressed plus
-    HDF5's metadata (for free-space checks before a run)."""
-    return int(sum(v.nbytes for v in ds.variables.values())) + 64 * 1024 + 2048 * len(ds.variables)
+    """The most bytes ``ds`` can take as a published file (for free-space checks before
+    a run): ``store.netcdf_write.space_bound``, the space a publish reserves."""
+    return space_bound(ds if isinstance(ds, Cube) else Cube.from_dataset(ds))
 
 
 class CubeError(StoreError, ValueError):

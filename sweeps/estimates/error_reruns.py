@@ -51,7 +51,7 @@ class SampleRuns:
         self.plan, self.finer = plan, errest.finer_numerics(plan)
         self.index, self.points = errest.sample(plan)
         self.scene = plan.scene.with_(integrator=self.finer.integrator)
-        cost = plan.costs[self.index]
+        cost = plan.costs_at(self.index)
         self.order = np.argsort(-cost, kind="stable")
         self.futures: dict[int, object] = {}
 

@@ -63,7 +63,7 @@ def _cut(plan: Plan, index: np.ndarray) -> list[np.ndarray]:
     """A level's points in blocks of balanced estimated cost (sweeps.planning.plan), at least two
     (both workers busy)."""
     n_blocks = max(math.ceil(index.size / BLOCK_POINTS[plan.path]), min(index.size, 2))
-    cost = plan.costs[index]
+    cost = plan.costs_at(index)
     return [index[b] for b in balanced_blocks(cost, n_blocks)]
 
 

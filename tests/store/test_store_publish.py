@@ -9,14 +9,17 @@ import sys
 import time
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import xarray as xr
-from storetest_cubes import block_record, make_cube
+from storetest_cubes import ATTRS, block_record, make_cube
 from storetest_writer import noise
 
+from tests.guarantee import skip_unless_ci
+
 import store
-from store import errors
+from store import errors, netcdf_write
 from store.atomic import temp_name
 from store.errors import NoSpaceError
 
@@ -56,18 +59,100 @@ def test_writer_dead_before_rename_leaves_old_cube_readable(cube, tmp_path):
 def test_failed_write_keeps_old_cube_and_removes_temp(cube, tmp_path, monkeypatch):
     path = store.publish(cube, tmp_path / "cube.nc")
     before = path.read_bytes()
+    written = []
 
-    def full(self, data):   # the disk fills up half-way through the temporary file
-        with open(self, "wb") as f:
-            f.write(bytes(data)[:100])
-        raise OSError(errno.ENOSPC, "No space left on device")
+    def full(dset, data, pool):   # the disk fills up half-way through the chunks
+        written.append(dset.name)
+        if len(written) == 2:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(dset, data, pool)
 
-    monkeypatch.setattr(Path, "write_bytes", full)
+    real = netcdf_write._write_chunks
+    monkeypatch.setattr(netcdf_write, "_write_chunks", full)
     with pytest.raises(NoSpaceError, match=r"no space left on device writing .*cube.nc: "
                        r"free \d+\.\d MB and submit again"):
         store.publish(make_cube(), path)
     monkeypatch.undo()
+    assert len(written) == 2 and path.read_bytes() == before and _temps(tmp_path) == []
+
+
+def test_a_disk_that_cannot_hold_the_file_is_refused_before_hdf5_writes(cube, tmp_path,
+                                                                          monkeypatch):
+    """The reservation is the guard (HDF5 meeting a full disk ends the process with a
+    segmentation fault: store.netcdf_write); a refused one writes nothing."""
+    path = store.publish(cube, tmp_path / "cube.nc")
+    before = path.read_bytes()
+    asked = []
+
+    def no_room(fd, nbytes):
+        asked.append((os.fstat(fd).st_size, nbytes))
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(netcdf_write, "reserve", no_room)
+    monkeypatch.setattr(netcdf_write, "_write", lambda *a: pytest.fail("HDF5 was started"))
+    with pytest.raises(NoSpaceError):
+        store.publish(make_cube(), path)
+    assert asked == [(0, netcdf_write.space_bound(make_cube()))]
     assert path.read_bytes() == before and _temps(tmp_path) == []
+
+
+def test_where_space_cannot_be_reserved_the_image_is_made_in_memory(cube, tmp_path,
+                                                                     monkeypatch):
+    def unsupported(fd, nbytes):
+        raise netcdf_write.ReserveUnsupported(errno.EOPNOTSUPP, "not here")
+
+    images = []
+    image = netcdf_write.netcdf_image
+    monkeypatch.setattr(netcdf_write, "reserve", unsupported)
+    monkeypatch.setattr(netcdf_write, "netcdf_image", lambda c: images.append(c) or image(c))
+    path = store.publish(cube, tmp_path / "cube.nc")
+    monkeypatch.undo()
+    assert len(images) == 1 and store.cube_io.disagreement(path, cube) is None
+    store.publish(cube, tmp_path / "reserved.nc")
+    xr.testing.assert_identical(store.open_cube(path), store.open_cube(tmp_path / "reserved.nc"))
+
+
+@pytest.mark.parametrize("shape", [(1, 1, 1, 1), (3, 4, 2, 1), (37, 29, 3, 2), (600, 600, 1, 1)])
+@pytest.mark.parametrize("values", ["noise", "constant", "nan"])
+def test_chunks_filtered_here_read_back_exactly_and_fit_the_reserved_space(tmp_path, shape,
+                                                                           values):
+    """store.netcdf_write filters the chunks itself (shuffle, ISA-L deflate, edge chunks
+    padded, incompressible chunks stored shuffled only): h5py's own filters read them
+    back exactly, and the file never outgrows the space reserved for it."""
+    coords = {a: np.arange(n, dtype=float) for a, n in zip(store.AXES, shape)}
+    outputs = {"F_mean": ("mean friction", "1"),
+               "alpha_hist": ("histogram", "1", ("alpha_bin", 10))}
+    cube = store.empty_cube(coords, outputs, ATTRS)
+    rng = np.random.default_rng(7)
+    for var in cube.data_vars.values():
+        var.data[...] = {"noise": rng.random(var.shape) * 100, "constant": 3,
+                         "nan": np.nan}[values] if var.dtype.kind == "f" else \
+            rng.integers(-100, 100, var.shape)
+    path = store.publish(cube, tmp_path / "cube.nc")
+    assert store.cube_io.disagreement(path, cube) is None
+    assert path.stat().st_size <= netcdf_write.space_bound(cube)
+    assert path.stat().st_blocks * 512 < path.stat().st_size + 64 * 1024   # reservation given back
+    with h5py.File(path) as f:
+        for name, var in cube.data_vars.items():
+            dset = f[name]
+            assert dset.compression == "gzip" and dset.shuffle
+            np.testing.assert_array_equal(dset[...], var.data)
+            masks = {dset.id.get_chunk_info(i).filter_mask
+                     for i in range(dset.id.get_num_chunks())}
+            assert masks <= {0, netcdf_write.DEFLATE_SKIPPED}
+
+
+def test_an_incompressible_chunk_is_stored_shuffled_only(tmp_path):
+    data = np.frombuffer(np.random.default_rng(3).bytes(8 * 4096), np.float64).reshape(
+        64, 64, 1, 1)
+    mask, raw = netcdf_write._filtered_chunk(data, (0, 0, 0, 0), (64, 64, 1, 1))
+    shuffled = data.view(np.uint8).reshape(-1, 8).T.tobytes()
+    assert (mask, raw) == (netcdf_write.DEFLATE_SKIPPED, shuffled)
+    coords = {a: np.arange(n, dtype=float) for a, n in zip(store.AXES, data.shape)}
+    cube = store.empty_cube(coords, {"F_mean": ("mean friction", "1")}, ATTRS)
+    cube["F_mean"].data[...] = data
+    path = store.publish(cube, tmp_path / "cube.nc")
+    np.testing.assert_array_equal(store.read_cube(path)["F_mean"].data, data)
 
 
 def test_publish_checks_free_space_before_writing(cube, tmp_path, monkeypatch):
@@ -144,3 +229,26 @@ def test_disagreement_says_how_a_published_cube_differs_from_the_journal(cube, t
     later.attrs["created"] = "2099-01-01T00:00:00+00:00"
     store.publish(later, path)
     assert disagreement(path, cube) is None   # the creation time is not compared
+
+
+def test_a_real_full_disk_is_a_no_space_error_not_a_segfault(tmp_path):
+    """A 600 x 600 noise cube (2.9 MB) published onto a 1-MB tmpfs: HDF5 writing into a
+    full disk ends the process with SIGSEGV (tried: exit 139, store.netcdf_write); the
+    reservation makes it a NoSpaceError with nothing left behind. Root only (tmpfs)."""
+    disk = tmp_path / "disk"
+    disk.mkdir()
+    mounted = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", str(disk)],
+                             capture_output=True, text=True)
+    if mounted.returncode != 0:
+        skip_unless_ci(f"cannot mount a tmpfs here: {mounted.stderr.strip() or 'not root'}")
+    try:
+        proc = subprocess.run([sys.executable, str(HERE / "storetest_writer.py"),
+                               str(disk / "cube.nc"), str(N_BIG)],
+                              capture_output=True, text=True, timeout=120)
+        assert proc.returncode == 1, proc.stderr[-2000:]
+        assert proc.stdout.splitlines() == ["start 0"]
+        assert proc.stderr.strip().splitlines()[-1].startswith(
+            f"store.errors.NoSpaceError: no space left on device writing {disk}/cube.nc")
+        assert list(disk.iterdir()) == [] and errors.free_bytes(disk) > 900 * 1024
+    finally:
+        subprocess.run(["umount", "--lazy", str(disk)], capture_output=True)
