@@ -3,7 +3,7 @@ feeds"): what the submitter does per block, measured piece by piece, and the tab
 workers it keeps busy that follows. Every figure is wall time and this process's CPU time
 (the machine may be shared: the load average is printed).
 
-    .venv/bin/python scripts/bench_scale.py [--quick]
+    .venv/bin/python scripts/bench_scale.py [--quick] [--only sink|publish|memory|dask|fed]
 
 1. sink: blocks/s that the journal and the catalogue (progress under the lease) accept,
    through ``sweeps.run.sink.BlockSink`` itself, with the cube filled and republished as
@@ -16,7 +16,10 @@ workers it keeps busy that follows. Every figure is wall time and this process's
    nothing: tasks/s and CPU per task, 1 thread per worker (3 tasks in flight: the latency
    of one task), 32 (65 in flight: the throughput of many workers), and 32 with 1000
    more worker addresses in every task's restriction (as 1000 matching workers give);
-5. the table: for a point cost, the plan's block, and the workers one submitter keeps
+5. fed: the submitter's side of 1,000 single-threaded workers at 1-s blocks (64 threads
+   whose blocks claim 0.064 s and return at once: 1,000 blocks/s asked of the dispatch,
+   which gives each task 10 blocks, as for 1,000 workers), blocks/s journaled;
+6. the table: for a point cost, the plan's block, and the workers one submitter keeps
    busy with one block a task, and with the blocks per task the dispatch chooses beyond
    the ceiling (sweeps.planning.plan.blocks_per_task).
 """
@@ -58,15 +61,17 @@ def _plan(spec: dict):
     return make_plan(load_spec(spec, max_points=2_000_000))
 
 
-def instant_block(scene, points, p, settings, index=None):
+def instant_block(scene, points, p, settings, index=None, sizes=None, point_s=None):
     """``sweeps.workers.task.compute_block`` computing nothing: what a worker returns for
-    ``points`` (a store.BlockRecord), at once, every value noise."""
+    ``points`` (a store.BlockRecord), at once, every value noise; each point claims to
+    have cost ``point_s`` seconds (default: noise in [0, 1))."""
     from store.record import BlockRecord
     from sweeps.version import results_fingerprint
 
     n, rng = len(points), np.random.default_rng(len(points))
     out = {k: rng.random((n, 10) if k == "alpha_hist" else n) for k in scene.outputs}
-    return BlockRecord(np.arange(n) if index is None else index, np.zeros(n), rng.random(n),
+    cost = rng.random(n) if point_s is None else np.full(n, point_s)
+    return BlockRecord(np.arange(n) if index is None else index, np.zeros(n), cost,
                        rng.integers(1, 10**6, n), rng.integers(1, 10**6, n), out,
                        fingerprint=results_fingerprint())
 
@@ -208,6 +213,47 @@ def bench_dask(tmp: Path, n_tasks: int) -> dict[str, tuple[float, float]]:
     return rates
 
 
+def bench_fed(tmp: Path, n_blocks: int) -> tuple[float, float, float]:
+    """The submitter's side of 1,000 single-threaded workers at 1-s blocks: 64 worker
+    threads (2 workers x 32) whose tasks return at once, every block claiming 0.064 s,
+    so that the dispatch is asked for 64 / 0.064 = 1,000 blocks a second and groups
+    blocks_per_task = 10 blocks a task, as it would for 1,000 workers at 1 s. Returns
+    (blocks/s, tasks/s, CPU ms a block) through the run's own dispatch and sink."""
+    import functools
+
+    from distributed import Client, LocalCluster
+
+    import store
+    from sweeps.run import dispatch
+    from sweeps.workers import task
+    from sweeps.workers.matching import matched
+
+    task.compute_block = functools.partial(instant_block, point_s=0.064 / 16)
+    plan = _plan(spec_of(16 * n_blocks, block=16))
+    tasks = []
+    submit = dispatch.blocks_per_task
+    dispatch.blocks_per_task = lambda *a, **k: tasks.append(submit(*a, **k)) or tasks[-1]
+    with LocalCluster(n_workers=2, threads_per_worker=32, host="127.0.0.1",
+                      dashboard_address=None, silence_logs=logging.CRITICAL,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster, \
+            Client(cluster) as client:
+        sweep, lease, cube, sink = _sweep(plan, tmp / "fed")
+        client.run(task.identity)
+        mc = matched(client)
+        t, c = time.perf_counter(), time.process_time()
+        dispatch._dispatch(mc, plan, list(range(n_blocks)), sink, _NoBar())
+        seconds, cpu = time.perf_counter() - t, time.process_time() - c
+        lease.end("done")
+    dispatch.blocks_per_task = submit
+    n_tasks = len(tasks)
+    done = len(store.Journal(sweep.journal).done())
+    print(f"fed       {n_blocks} blocks of 16 points claiming 0.064 s each, 2 workers x 32 "
+          f"threads: {n_blocks / seconds:6,.0f} blocks/s in {n_tasks} tasks "
+          f"({n_tasks / seconds:,.0f} tasks/s; blocks a task: the first {tasks[0]}, then "
+          f"{max(tasks)}), {1e3 * cpu / n_blocks:.2f} ms CPU a block; {done} blocks journaled")
+    return n_blocks / seconds, n_tasks / seconds, 1e3 * cpu / n_blocks
+
+
 class _NoBar:
     def update(self, n) -> None:
         pass
@@ -245,7 +291,7 @@ def cpu_model() -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller sizes (a smoke run)")
-    ap.add_argument("--only", choices=("sink", "publish", "memory", "dask"),
+    ap.add_argument("--only", choices=("sink", "publish", "memory", "dask", "fed"),
                     help="one measure alone (no table)")
     args = ap.parse_args()
     sizes = [1_000, 10_000, 100_000] + ([] if args.quick else [1_000_000])
@@ -260,6 +306,7 @@ def main() -> None:
         if run("memory"):
             bench_memory(tmp, sizes[1:])
         dask_rates = bench_dask(tmp, 200 if args.quick else 1000) if run("dask") else {}
+        fed = bench_fed(tmp, 2000 if args.quick else 20000) if run("fed") else None
     print(f"load average {' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     if args.only is None:
         table(sink_rates, dask_rates)

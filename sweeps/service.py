@@ -132,7 +132,8 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
     catalogue = Catalogue(root)
     me = owner_tag()
     stop = threading.Event()
-    where = scheduler or f"local cluster of {workers} workers"
+    where = scheduler or (f"local cluster of {workers} workers" if isinstance(workers, int)
+                          else f"up to {workers.jobs} {workers.kind} batch jobs")
     client_cm = client = None
     idle_since = time.monotonic()
     current = {"sweep_id": ""}
@@ -199,6 +200,9 @@ def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
                     say(f"serve: {sweep_id}: {res.state}, ran {res.blocks_run} blocks; "
                         f"{res.n_ok}/{res.n_points} ok, {res.n_failed} failed; "
                         f"{res.wall_s:.1f} s" + (f" ({res.message})" if res.message else ""))
+                finally:   # batch jobs end between sweeps: no allocation held while waiting
+                    if getattr(client, "scaler", None) is not None:
+                        client.scaler.release()
                 idle_since = time.monotonic()
                 catalogue.server_beat(me, cluster=where)
     finally:

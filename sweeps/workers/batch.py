@@ -140,10 +140,22 @@ def batch_client(workers: BatchWorkers, dashboard: str | None = None):
 class JobScaler:
     """Ends jobs the work no longer needs: once fewer blocks are left than jobs, jobs not
     started yet are withdrawn first, then workers holding no block are retired (their
-    jobs end). Never grows the cluster."""
+    jobs end). Grows the cluster only when a run starts (:meth:`start`); a cluster kept
+    between runs (``ditherlab serve``) holds no job while it waits (:meth:`release`)."""
 
     def __init__(self, cluster, client):
         self.cluster, self.client = cluster, client
+
+    def start(self, jobs: int) -> None:
+        """A run begins that wants ``jobs`` jobs (BatchWorkers.for_blocks)."""
+        if len(self.cluster.worker_spec) != jobs:
+            log.debug("%d %s jobs for this run", jobs, type(self.cluster).__name__)
+            self.cluster.scale(jobs=jobs)
+
+    def release(self) -> None:
+        """The run is over: every job ends (the next run's :meth:`start` submits again)."""
+        if self.cluster.worker_spec:
+            self.cluster.scale(0)
 
     def tick(self, blocks_left: int) -> None:
         requested = len(self.cluster.worker_spec)

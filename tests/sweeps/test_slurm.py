@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -165,6 +166,60 @@ def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
         (gate / "open").touch()
     _finished(proc)
     _same(tmp_path / "store", local_cube)
+
+
+def _wait(what: str, check, seconds: float = 600) -> None:
+    t0 = time.monotonic()
+    while not check():
+        assert time.monotonic() - t0 < seconds, f"{what}: not within {seconds:.0f} s"
+        time.sleep(0.5)
+
+
+def test_serve_cluster_slurm_runs_the_queue_and_holds_no_job_between_sweeps(
+        slurm_env, local_cube, tmp_path):
+    """``ditherlab serve --cluster slurm``: a queued sweep runs on batch jobs and equals a
+    local run; once it is done the jobs end while serve waits (found: its 2 jobs held for
+    as long as serve ran), and a sweep queued after that gets jobs again (it would have
+    waited for ever with the jobs ended)."""
+    bin_, root = str(Path(sys.executable).parent / "ditherlab"), tmp_path / "store"
+    second = {**SPEC, "name": "slurm-second", "grid": {**SPEC["grid"], "v_ref": [0.3]}}
+    assert sweeps.run_sweep(second, store=tmp_path / "local2", workers=1,
+                            progress=False).state == "done"
+
+    def detach(spec: dict, name: str) -> str:
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps(spec))
+        out = subprocess.run([bin_, "submit", str(path), "--detach", "--store", str(root)],
+                             env=slurm_env, capture_output=True, text=True, check=True).stdout
+        return out.split(":")[0]
+
+    def state(sweep_id: str) -> str:
+        return store.Catalogue(root).get(sweep_id)["state"]
+
+    first = detach(SPEC, "first")
+    log = tmp_path / "serve.log"
+    with open(log, "w") as out:
+        serve = subprocess.Popen([bin_, "serve", "--store", str(root), "--cluster", "slurm",
+                                  "--jobs", "2"], cwd=tmp_path, env=slurm_env, stdout=out,
+                                 stderr=subprocess.STDOUT, start_new_session=True)
+    try:
+        _wait("the first sweep done", lambda: state(first) == "done")
+        _wait("its batch jobs ended while serve waits", lambda: not slurm.jobs(slurm_env), 120)
+        assert serve.poll() is None, log.read_text()
+        later = detach(second, "second")
+        _wait("the sweep queued after the jobs ended done", lambda: state(later) == "done")
+        _wait("the jobs ended again", lambda: not slurm.jobs(slurm_env), 120)
+        serve.send_signal(signal.SIGTERM)
+        assert serve.wait(timeout=120) == 0, log.read_text()
+    finally:
+        if serve.poll() is None:
+            os.killpg(serve.pid, signal.SIGKILL)
+    text = log.read_text()
+    assert "up to 2 slurm batch jobs" in text and "Traceback" not in text, text
+    _same(root, local_cube)
+    cube, local2 = (sweeps.open_sweep(later, store=r) for r in (root, tmp_path / "local2"))
+    for name in SPEC["outputs"]:
+        np.testing.assert_array_equal(cube[name].values, local2[name].values)
 
 
 def test_no_more_jobs_than_blocks():
