@@ -37,6 +37,9 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
     with (nullcontext(client) if client is not None
           else dask_client(scheduler, workers, dashboard)) as cluster_client:
         client = matched(cluster_client)
+        if getattr(client, "scaler", None) is not None and todo and not isinstance(workers, int):
+            # batch jobs for these blocks: serve waits without any, a refined level may end some
+            client.scaler.start(workers.for_blocks(len(todo)).jobs)
         timings["cluster_s"] = time.perf_counter() - t
         t = time.perf_counter()
         warm = _warm_up_workers(client, plan, sink) if warm_up else not sink.should_stop()

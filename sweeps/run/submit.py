@@ -113,8 +113,6 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     client = matched(client)   # blocks go only to workers that run this engine
     if not isinstance(workers, int):   # batch jobs (sweeps.workers.batch): no more than blocks
         workers = workers.for_blocks(len(todo))
-        if getattr(client, "scaler", None) is not None and todo:   # serve's cluster, kept
-            client.scaler.start(workers.jobs)   # between runs without jobs: submitted again
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and (todo or needs_estimate(plan, sweep, cube)) else None
