@@ -222,6 +222,38 @@ def test_serve_cluster_slurm_runs_the_queue_and_holds_no_job_between_sweeps(
         np.testing.assert_array_equal(cube[name].values, local2[name].values)
 
 
+REFINED = {"name": "slurm-refined", "friction": "elastoplastic", "dither": "sine-velocity",
+           "outputs": ["long_stick_fraction"], "accuracy": "draft", "refine": True,
+           "params": {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}},
+           "time": {"t_end": 20.0, "t_transient": 5.0},
+           "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 9},
+                    "omega": {"start": 10.0, "stop": 1000.0, "num": 9, "scale": "log"},
+                    "v_ref": [0.1]}}
+
+
+def test_a_refined_sweep_on_batch_jobs_equals_a_local_one(slurm_env, tmp_path):
+    """Level after level on batch jobs (each level's jobs submitted again after the last
+    level's tail ended some): the cube, provenance included, is a local run's."""
+    import warnings
+
+    local = sweeps.run_sweep(REFINED, store=tmp_path / "local", workers=2, progress=False)
+    spec = tmp_path / "refined.json"
+    spec.write_text(json.dumps(REFINED))
+    proc = subprocess.run([str(Path(sys.executable).parent / "ditherlab"), "submit", str(spec),
+                           "--store", str(tmp_path / "store"), "--cluster", "slurm", "--jobs",
+                           "2", "-q"], cwd=tmp_path, env=slurm_env, capture_output=True,
+                          text=True, timeout=1500)
+    assert proc.returncode == 0 and local.state == "done", proc.stderr
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sweeps.InferredPointsWarning)
+        cubes = [sweeps.open_sweep(local.sweep_id, store=r) for r in (tmp_path / "local",
+                                                                       tmp_path / "store")]
+    assert 0 < (cubes[0]["provenance"].values == 1).sum() < cubes[0]["provenance"].size
+    for name in ("status", "provenance", "long_stick_fraction"):
+        np.testing.assert_array_equal(cubes[1][name].values, cubes[0][name].values)
+    assert not slurm.jobs(slurm_env), "the run's batch jobs outlived it"
+
+
 def test_no_more_jobs_than_blocks():
     from sweeps.workers.batch import BatchWorkers
 
