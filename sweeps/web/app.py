@@ -42,6 +42,11 @@ class Context:
 
         return SweepDir(self.root, sweep_id).cube
 
+    def shown(self, text: str) -> str:
+        """``text`` (a store's message) with the store's folder left out: a page names
+        paths inside the store, never the server's folders."""
+        return text.replace(f"{self.root}/", "").replace(str(self.root), "the store")
+
     def plan(self, sweep_id: str, spec: dict):
         from .sweep_view import plan_cached
 

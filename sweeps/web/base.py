@@ -77,7 +77,7 @@ class Base(tornado.web.RequestHandler):
         elif isinstance(e, (RefusedError,)):
             self._reply(400, str(e))
         elif isinstance(e, UserError):
-            self._reply(409, str(e))
+            self._reply(409, self.ctx.shown(str(e)))
         else:
             super()._handle_request_exception(e)
 

@@ -28,7 +28,7 @@ def _snapshot(ctx, sweep_id: str):
     except OverflowError as exc:
         raise Refused(413, str(exc)) from None
     except UserError as exc:
-        raise Refused(409, str(exc)) from None
+        raise Refused(409, ctx.shown(str(exc))) from None
     return snap
 
 

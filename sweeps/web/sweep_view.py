@@ -122,7 +122,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
         try:
             check_cube_of(ds, sweep_id, cube_path)
         except UserError as exc:
-            raise Refused(409, str(exc)) from None
+            raise Refused(409, ctx.shown(str(exc))) from None
     detail = sweep_detail(ctx.root, sweep_id, ds)
     from ..estimates.time_history import recorded
 

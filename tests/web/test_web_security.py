@@ -195,3 +195,23 @@ def test_the_token_rules(tmp_path):
     assert security.parse_bind("[::1]:9") == ("::1", 9)
     with pytest.raises(RefusedError, match="HOST:PORT"):
         security.parse_bind("8700")
+
+
+def test_a_cube_of_another_sweep_is_refused_without_the_servers_folders(web_store, serve_ctx,
+                                                                         tmp_path):
+    """A sweep folder holding another sweep's cube (copied by hand) is a 409 that names
+    both sweeps and the folder inside the store, not where the store lives (it did:
+    'the cube at /tmp/.../store/<id>/cube.nc is sweep ...')."""
+    from sweeps.web.app import Context
+
+    root = tmp_path / "copy"
+    shutil.copytree(web_store["root"], root)
+    avg, tiny = web_store["avg"], web_store["tiny"]
+    shutil.copyfile(root / tiny / "cube.nc", root / avg / "cube.nc")
+    base = serve_ctx(Context(root))
+    for path in (f"/sweep/{avg}", f"/sweep/{avg}/cube.nc"):
+        status, _, body = request(base, path)
+        text = body.decode()
+        assert status == 409, (path, status, text)
+        assert f"the cube at {avg}/cube.nc is sweep {tiny}'s, not {avg}'s" in text, text
+        assert str(tmp_path) not in text, text
