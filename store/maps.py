@@ -70,6 +70,16 @@ def _figure() -> tuple[Figure, object]:
     return fig, ax
 
 
+def warm() -> None:
+    """Load what a first map needs (matplotlib's Agg, fonts, mathtext) by drawing a figure
+    into memory: a process that draws on demand (the web view's) calls it at start."""
+    import io
+
+    fig, ax = _figure()
+    ax.set_xlabel(r"$v_\mathrm{ref}$ x")
+    fig.savefig(io.BytesIO(), format="png")
+
+
 def _grid_on_top(ax) -> None:
     """Light grid lines drawn over a shaded map (they would vanish below it)."""
     ax.set_axisbelow(False)

@@ -43,13 +43,9 @@ def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:
 
 def _warm() -> None:
     """matplotlib and xarray loaded, fonts and mathtext read, before the first map."""
-    import io
-
     import store.maps
 
-    fig, ax = store.maps._figure()
-    ax.set_xlabel(r"$v_\mathrm{ref}$ x")
-    fig.savefig(io.BytesIO(), format="png")
+    store.maps.warm()
 
 
 def _follow_parent(parent: int) -> None:
