@@ -103,17 +103,7 @@ def compare(plan: Plan, cube, index: np.ndarray, finer, label: str) -> dict:
         fine = finer.outputs[name][ok]
         if coarse.size == 0:
             continue
-        diff = np.abs(coarse - fine)
-        if name in FRACTION_OUTPUTS:
-            err = diff
-        else:
-            floor = REL_FLOOR * float(np.nanmax(np.abs(fine))) if np.isfinite(fine).any() else 0
-            if name == "max_stick":   # a run matters against the long-stick threshold
-                floor = max(floor, float(plan.params[P.LONG_STICK]))
-            err = diff / np.maximum(np.maximum(np.abs(fine), floor), 1e-300)
-        worst = float(np.nanmax(err)) if np.isfinite(err).any() else float("inf")
-        if np.isnan(coarse).any() != np.isnan(fine).any():
-            worst = float("inf")
+        worst = output_change(name, coarse, fine, float(plan.params[P.LONG_STICK]))
         change[name], promised[name] = worst, promise(level, name, plan.spec.friction)
         if not worst <= promised[name]:
             warnings.append(_warning(name, worst, promised[name], plan.numerics.label, label))
@@ -124,6 +114,24 @@ def compare(plan: Plan, cube, index: np.ndarray, finer, label: str) -> dict:
     return {"compared_with": label, "level": plan.numerics.label,
             "sample_points": int(ok.sum()), "sample_index": [int(i) for i in index],
             "change": change, "promise": promised, "warnings": warnings}
+
+
+def output_change(name: str, coarse: np.ndarray, fine: np.ndarray, long_stick: float) -> float:
+    """The largest change of output ``name`` between values at a level (``coarse``) and
+    finer values of the same points, as promises are stated: absolute for fractions,
+    else relative to ``max(|fine|, REL_FLOOR x max |fine|)`` (``max_stick``: also at least
+    ``long_stick``); infinite where only one side is NaN."""
+    diff = np.abs(coarse - fine)
+    if name in FRACTION_OUTPUTS:
+        err = diff
+    else:
+        floor = REL_FLOOR * float(np.nanmax(np.abs(fine))) if np.isfinite(fine).any() else 0
+        if name == "max_stick":   # a run matters against the long-stick threshold
+            floor = max(floor, long_stick)
+        err = diff / np.maximum(np.maximum(np.abs(fine), floor), 1e-300)
+    if np.isnan(coarse).any() != np.isnan(fine).any():
+        return float("inf")
+    return float(np.nanmax(err)) if np.isfinite(err).any() else float("inf")
 
 
 def _warning(name: str, change: float, promised: float, level: str, finer: str) -> str:

@@ -111,8 +111,13 @@ LAW_PROMISE_OVERRIDES = {
 # F_mean, as it moves the run lengths above. On specs/demo-stick-slip.toml (49 points, sine
 # dither up to omega = 2000) draft (DP5 rtol 1e-5) against standard was 3.4e-2 off at most
 # (W = 2, omega = 2000; 9 of 49 points above 1e-2), which the error estimate reported as the
-# demo's first output line (issue 30; scripts/promise_check.py, docs/ACCURACY.md 5.2)
-LAW_PROMISE_OVERRIDES["elastoplastic"] = {"F_mean": {"draft": 5e-2}}
+# demo's first output line (issue 30; scripts/promise_check.py, docs/ACCURACY.md 5.2). Its
+# near_slip_fraction (alpha >= 0.9) moves with the same events: on the whole demo grid
+# draft against standard was 1.06e-2 off at one point of 49 (0.83e-2 at most on the small
+# Fig. 14 scene), which the 12-point error sample reports or not as the sweep's id draws it
+# (scripts/promise_check.py's grid comparison, docs/ACCURACY.md 5.3)
+LAW_PROMISE_OVERRIDES["elastoplastic"] = {"F_mean": {"draft": 5e-2},
+                                          "near_slip_fraction": {"draft": 2e-2}}
 
 
 def promise(level: str, output: str, friction: str | None = None) -> float:
