@@ -87,6 +87,19 @@ is the target each path was built to, `ratio` the time over it. The first calls 
 load numba's cached kernels. The quadrature table shows how fast the sine-dither average
 converges with the number of nodes n (the engine uses n = 64), and the last lines time the
 harmonic balance of the contact system of Fig. 1."""),
+    Bench("How far one submitting process scales", "bench_scale.py", (), ("--quick",),
+          """What the submitting process does per block, piece by piece ([BATCH.md](BATCH.md#how-many-workers-one-submitter-feeds)):
+blocks/s the journal, cube and catalogue accept (`sink`, handed over one by one and in
+groups), a cube's publish against its size with and without `alpha_hist`, the submitter's
+peak memory against the cube, dask's tasks/s through the run's own dispatch with tasks that
+compute nothing (`dask`), and the submitter's side of 1,000 workers at 1-s blocks (`fed`).
+Noise values everywhere, the worst case for compression. The last table: how many
+single-threaded workers one submitter keeps busy for a point cost, and the blocks a task
+the dispatch gives 1,000 workers."""),
+    Bench("The web view", "bench_web.py", (), ("--sweeps", "100", "--repeat", "8"),
+          """`ditherlab web` in its own process, timed from a client ([WEB.md](WEB.md)): the catalogue
+page with 1,000 sweeps, a map drawn the first time and from the cache, and the explorer's
+200 x 200 stability chart from click to image; each against its target."""),
 )
 
 
