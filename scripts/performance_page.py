@@ -161,10 +161,9 @@ again. Back to the [README](../README.md).
 - **Code**: commit {code}.
 - **CPU**: {cpu_model()}, {len(os.sched_getaffinity(0))} cores usable; Python
   {platform.python_version()}, numpy {numpy.__version__}, numba {numba.__version__}.
-- **Load average**: {load_start} at the start, {load_end} at the end. This machine is
-  shared: {args.busy_note} Absolute times are then longer than on an idle machine; the
-  engine-to-C ratios are timed in alternation in one process and suffer least, and the
-  analysis times are also given relative to a workload timed in the same run.
+- **Load average**: {load_start} at the start, {load_end} at the end. {args.busy_note} The
+  engine-to-C ratios are timed in alternation in one process and suffer least from other
+  load, and the analysis times are also given relative to a workload timed in the same run.
 
 How accurate each level is, and what accuracy costs per integrator, is the work-precision
 study in [ACCURACY.md](ACCURACY.md); the model is in [MODEL.md](MODEL.md).
@@ -177,8 +176,9 @@ def main(argv=None) -> None:
     ap.add_argument("--quick", action="store_true",
                     help="a subset with small options (a check that the page can be made)")
     ap.add_argument("-o", "--output", type=Path, default=PAGE, help=f"default {PAGE}")
-    ap.add_argument("--busy-note", default="other jobs ran while these numbers were taken.",
-                    help="a sentence on the page about the machine's load")
+    ap.add_argument("--busy-note", default="This machine is shared: other jobs ran while "
+                    "these numbers were taken, so absolute times are longer than on an idle "
+                    "machine.", help="a sentence on the page about the machine's load")
     args = ap.parse_args(argv)
     started, code, load_start = datetime.datetime.now(datetime.timezone.utc), commit(), load()
     parts = []
