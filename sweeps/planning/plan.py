@@ -173,8 +173,13 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
     if spec.method == "simulate" and not spec.block_size:
+        # about BLOCK_SECONDS a block, but never fewer than lo points: the price per radian
+        # is Fig. 14's at standard, ~70x a draft LuGre point's, and a dask task costs 10-25
+        # ms here (scripts/bench_sweep.py, quiet: 1000 draft LuGre points in 409 blocks of
+        # 14 ms lost 150 % to dask on 2 workers, in 63 blocks of 16 points 50 %)
         seconds = costs.sum() * spec.time.t_end * SECONDS_PER_RADIAN
-        n_blocks = min(n, max(n_blocks, math.ceil(seconds / BLOCK_SECONDS)))
+        n_blocks = min(n, max(n_blocks, min(math.ceil(seconds / BLOCK_SECONDS),
+                                            math.ceil(n / lo))))
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
