@@ -81,9 +81,9 @@ def atomic_write(path: Path, write: Callable[[Path], None] | bytes | memoryview)
     except BaseException as err:
         with suppress(OSError):
             tmp.unlink()
-        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT) \
-                and not isinstance(err, NoSpaceError):
-            raise NoSpaceError(path) from err
+        if isinstance(err, OSError) and err.errno in (errno.ENOSPC, errno.EDQUOT):
+            # named by the final path (a writer's own NoSpaceError names the temporary one)
+            raise NoSpaceError(path, getattr(err, "needed", 0)) from err
         raise
     fsync_dir(path.parent)
     return path

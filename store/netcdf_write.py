@@ -41,7 +41,7 @@ from isal import isal_zlib
 
 from . import attrs as A
 from .cubedata import Cube
-from .errors import NoSpaceError
+from .errors import NoSpaceError, ensure_space
 
 ZLIB_LEVEL = 1          # store.cube_io: level 1 rather than 4 (docs/BATCH.md)
 COMPRESSION = {"compression": "gzip", "compression_opts": ZLIB_LEVEL, "shuffle": True}
@@ -64,21 +64,19 @@ def write_netcdf(cube: Cube, path: Path) -> None:
     created here), its space reserved first (module docstring). Raises
     ``NoSpaceError`` if the disk cannot hold :func:`space_bound` bytes, with nothing
     written; the caller removes ``path`` on any error."""
-    path = Path(path)
+    path, bound = Path(path), space_bound(cube)
     fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o666)
     with os.fdopen(fd, "r+b", buffering=0) as f:
         try:
-            reserve(fd, space_bound(cube))
+            reserve(fd, bound)
         except ReserveUnsupported:
-            from .errors import ensure_space
-
             image = netcdf_image(cube)
             ensure_space(path, len(image))
             f.write(image)
             return
         except OSError as err:
             if err.errno in (errno.ENOSPC, errno.EDQUOT):
-                raise NoSpaceError(path, space_bound(cube)) from err
+                raise NoSpaceError(path, bound) from err
             raise
         _write(cube, f)
         os.ftruncate(fd, os.fstat(fd).st_size)   # give back the reservation beyond the end
