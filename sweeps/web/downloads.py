@@ -9,7 +9,8 @@ import asyncio
 from ..errors import RefusedError, UserError
 from .base import Base, Refused
 from .pages import in_executor
-from .renders import MEDIA, Busy
+from .errors import Busy
+from .renders import MEDIA
 
 MAX_CELLS = 2_000_000
 

@@ -16,6 +16,7 @@ from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 
 from ..errors import RefusedError
+from .errors import Busy
 
 MAX_AXIS = 400
 PARAMS = ("sigma0", "sigma1", "sigma2", "vs", "fc", "fs")
@@ -25,10 +26,6 @@ DEFAULTS = {"friction": "lugre", "dither": "square-velocity", "v_d": "0.1",
             "W_start": "0", "W_stop": "1.2", "W_num": "121",
             "v_ref_start": "0.005", "v_ref_stop": "1.2", "v_ref_num": "120", "curves": "5"}
 KEEP = 4
-
-
-class Busy(Exception):
-    """Another explorer computation is running."""
 
 
 def _number(query: dict, name: str, kind=float):

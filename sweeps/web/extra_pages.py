@@ -11,7 +11,8 @@ from urllib.parse import urlencode
 
 from ..errors import RefusedError
 from .base import HERE, Base, Refused
-from .explorer import DEFAULTS, DITHERS, FRICTIONS, MAX_AXIS, PARAMS, Busy, curves_wanted
+from .errors import Busy
+from .explorer import DEFAULTS, DITHERS, FRICTIONS, MAX_AXIS, PARAMS, curves_wanted
 from .explorer import spec_from_query
 from .security import GALLERY_CSP
 from .tomltext import spec_toml
@@ -73,14 +74,14 @@ class ExplorerImage(Base):
         spec = spec_from_query(fields)
         curves = curves_wanted(fields)
         key = hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
+        maps = self.ctx.maps
         try:
             cube = await asyncio.wrap_future(self.ctx.explorer.cube(key, spec))
+            draw = {"stability": lambda: maps.draw(cube, "stability", {}, None, "png"),
+                    "friction": lambda: maps.draw(cube, "friction", {}, curves, "png")}[kind]
+            fut = maps.get(("explorer", key, kind, curves), draw)
         except Busy as exc:
             raise Refused(503, str(exc)) from None
-        maps = self.ctx.maps
-        draw = {"stability": lambda: maps.draw(cube, "stability", {}, None, "png"),
-                "friction": lambda: maps.draw(cube, "friction", {}, curves, "png")}[kind]
-        fut = maps.get(("explorer", key, kind, curves), draw)
         data = await asyncio.wrap_future(fut)
         self.set_header("Content-Type", "image/png")
         self.finish(data)

@@ -17,14 +17,12 @@ from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
+from .errors import Busy
+
 RENDER_THREADS = 2   # the explorer's chart and curves are drawn side by side on 2 cores
 MAX_WAITING = 32
 CACHE_BYTES = 128 << 20
 MEDIA = {"png": "image/png", "svg": "image/svg+xml", "pdf": "application/pdf"}
-
-
-class Busy(Exception):
-    """Too many maps waiting to be drawn."""
 
 
 def render(ds, kind: str, sel: dict, pick: int | None, fmt: str) -> bytes:

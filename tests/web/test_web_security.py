@@ -129,6 +129,23 @@ def test_map_renders_beyond_the_cap_are_refused_not_queued(server, web_store):
         ctx.maps._pending.clear()
 
 
+def test_explorer_images_beyond_the_render_cap_are_refused_not_queued(server):
+    """The explorer's chart goes through the same render queue as the sweep maps: full,
+    it is the same 503 (it was a 500: the queue's refusal was another class of the same
+    name than the one the explorer's handler caught)."""
+    from concurrent.futures import Future
+
+    base, ctx = server
+    held = Future()
+    for i in range(ctx.maps.max_waiting):
+        ctx.maps._pending[("held", i)] = held
+    try:
+        status, _, body = request(base, "/explorer/stability.png?W_num=3&v_ref_num=3")
+        assert status == 503 and b"try again" in body, (status, body[:300])
+    finally:
+        ctx.maps._pending.clear()
+
+
 def test_a_second_explorer_computation_is_refused_while_one_runs(server):
     base, ctx = server
     ctx.explorer._running = "someone else's"
