@@ -49,6 +49,16 @@ class Simulation:
     truncated: bool = False
 
 
+def pack_for(scene: Scene, values: dict) -> np.ndarray:
+    """The parameter vector of ``scene`` from a dict: shared names (engine.params) and the
+    models' own (a GMS law's ``k``, ``alpha``, ``C``), the system's defaults elsewhere."""
+    from . import registry
+
+    shared = {k: v for k, v in values.items() if k in P.INDEX}
+    own = {k: v for k, v in values.items() if k not in P.INDEX}
+    return registry.pack(scene.friction, scene.system, own, **shared)
+
+
 def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool = False,
              record_every: int = 1, record_dt: float | None = None, record_from: float = 0.0,
              max_records: int = 2_000_000) -> Simulation:
@@ -57,7 +67,8 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     Parameters
     ----------
     scene : compile-time choices (``scene.path`` must be ``"simulate"``).
-    p : parameter vector (``engine.params.pack``) or a dict of overrides of the paper set.
+    p : parameter vector (``engine.registry.pack``; ``engine.params.pack`` for the paper's
+        laws) or a dict of overrides of the system's defaults (:func:`pack_for`).
     settings : tolerances / steps (default ``Settings()``).
     record : keep ``(t, y)`` of every ``record_every``-th accepted step, at most
         ``max_records`` rows (API only; the batch path never records).
@@ -68,7 +79,10 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     if scene.path in ANALYSIS_PATHS:
         raise ValueError(f"scene.path: simulate() integrates in time; {scene.path!r} is "
                          "an analysis path, use engine.batch.run_block")
-    p = P.pack(**p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
+    p = pack_for(scene, p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
+    if p.shape != (scene.n_params,):
+        raise ValueError(f"p: expected {scene.n_params} parameters for this scene "
+                         f"(engine.registry.pack), got shape {p.shape}")
     scene.check_params(p)
     if record_every < 1:
         raise ValueError(f"record_every must be >= 1, got {record_every}")

@@ -38,9 +38,10 @@ def _check(scene: Scene, points: np.ndarray, p: np.ndarray) -> None:
     if points.ndim != 2 or points.shape[1] != len(POINT_AXES):
         raise ValueError(f"points: expected shape (n, {len(POINT_AXES)}) with columns "
                          f"{POINT_AXES}, got {points.shape}")
-    if p.shape != (P.N_PARAMS,):
-        raise ValueError(f"p: expected the parameter vector of shape ({P.N_PARAMS},) from "
-                         f"engine.params.pack, got {p.shape}")
+    if p.shape != (scene.n_params,):
+        raise ValueError(f"p: expected the parameter vector of shape ({scene.n_params},) from "
+                         f"engine.registry.pack (engine.params.pack for the paper's laws), "
+                         f"got {p.shape}")
     scene.check_params(p)
 
 

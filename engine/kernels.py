@@ -90,7 +90,7 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                       observe=observer.observe, record=not sampled_record,
                       needs_mid=observer.needs_mid, graze=system.event_jumps,
                       sampling=sampled_record,
-                      sample=_record_instant)
+                      sample=_record_instant, update_modes=system.update_modes)
     stepper = method_module(scene).make_stepper(problem)
     solve = make_solve(stepper, observer, scene.dither)
     init, obs_init, finish, scales = system.init, observer.init, observer.finish, system.scales

@@ -110,30 +110,66 @@ class Observer(NamedTuple):
     finish: Callable       # finish(t, y, p, obs, out)
 
 
-def check_outputs(outputs) -> None:
-    """Raise ValueError naming any output the simulate path does not know."""
-    bad = [o for o in outputs if o not in SIMULATE]
+def check_outputs(outputs, own=()) -> None:
+    """Raise ValueError naming any output the simulate path does not know (``own``: the
+    system's own observables)."""
+    bad = [o for o in outputs if o not in SIMULATE and o not in own]
     if bad:
         raise ValueError(f"outputs: unknown simulate observable(s) {bad}; "
-                         f"known: {tuple(SIMULATE)}")
+                         f"known: {tuple(SIMULATE) + tuple(own)}")
 
 
 def make_observer(scene, system) -> Observer:
     """Compile the hooks for ``scene.outputs`` on ``system`` (engine.systems.System)."""
     outs = tuple(scene.outputs)
-    check_outputs(outs)
-    names = tuple(o for o in outs if o not in VECTOR)
+    so = system.outputs
+    check_outputs(outs, so.names if so is not None else ())
+    own = so.names if so is not None else ()
+    names = tuple(o for o in outs if o not in VECTOR and o not in own)
     phases = any(o in PHASE_OUTPUTS for o in outs)
     hist = "alpha_hist" in outs
     undithered = CODE[scene.dither] == NONE
     p2p = "v_slow_p2p" in outs
     period_stops = p2p and not undithered
-    elasto = scene.friction == "elastoplastic"
+    elasto = system.phases == "elasto"
     hooks = _make_hooks(system, phases, hist, p2p and undithered, period_stops, elasto,
-                        scene.friction == "lugre", make_g(scene.stribeck, scene.delta))
+                        system.phases == "band", make_g(scene.stribeck, scene.delta))
     finish = _make_finish(system, names, hist)
     needs_mid = phases or (p2p and undithered)
-    return Observer(O_SIZE, names, hist, needs_mid, period_stops, *hooks, finish)
+    size = O_SIZE
+    if so is not None:   # the system's own observables: slots after the engine's
+        hooks, finish = _with_system_outputs(hooks, finish, so, len(names), hist)
+        names, needs_mid, size = names + own, True, O_SIZE + so.size
+    return Observer(size, names, hist, needs_mid, period_stops, *hooks, finish)
+
+
+def _with_system_outputs(hooks, finish, so, k, hist):
+    """The hooks and finish of the engine's observables, followed by the system's on the
+    slots ``obs[O_SIZE:]``; its outputs go after the engine's ``k`` scalars (alpha_hist after
+    them all)."""
+    init, start, observe, stop = hooks
+    s_start, s_observe, s_finish, m = so.start, so.observe, so.finish, len(so.names)
+
+    @njit(inline="always", error_model="numpy")
+    def start2(t, y, p, sq, obs):
+        start(t, y, p, sq, obs)
+        s_start(t, y, p, sq, obs[O_SIZE:])
+
+    @njit(inline="always", error_model="numpy")
+    def observe2(t0, y0, t1, y1, ymid, p, sq, obs):
+        observe(t0, y0, t1, y1, ymid, p, sq, obs)
+        if obs[O_ON] != 0.0:
+            s_observe(t0, y0, t1, y1, ymid, p, sq, obs[O_SIZE:])
+
+    @njit(inline="always", error_model="numpy")
+    def finish2(t, y, p, obs, out):
+        finish(t, y, p, obs, out)
+        if hist:   # the engine's finish wrote the histogram after its own k scalars
+            for j in range(N_HIST - 1, -1, -1):
+                out[k + m + j] = out[k + j]
+        s_finish(t, y, p, obs[O_SIZE:], out[k:k + m], t - obs[O_T0])
+
+    return (init, start2, observe2, stop), finish2
 
 
 def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto, band_law):

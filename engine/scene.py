@@ -8,10 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 from . import params as P
+from . import registry
 from .dither import KINDS as DITHER_KINDS
-from .friction import LAWS
-
-SYSTEMS = ("slider", "contact")
 PATHS = ("simulate", "averaged", "hbm")   # how a point is answered (a spec's ``method``)
 ANALYSIS_PATHS = ("averaged", "hbm")      # no time integration
 FOLDED_EXPONENTS = (1.0, 2.0)             # Stribeck exponents with a pow-free kernel
@@ -29,6 +27,10 @@ class Scene:
     ``path`` -- ``"simulate"`` (time integration), ``"averaged"`` or ``"hbm"`` (engine.analysis);
     a sweep spec calls it ``method``. ``integrator`` -- a name of
     :data:`engine.integrators.METHODS`; off the simulate path it is cleared to ``""``.
+    ``system``, ``friction`` -- a built-in name (:data:`engine.registry.SYSTEM_NAMES`,
+    :data:`engine.registry.LAW_NAMES`) or an import path ``"module:Name"`` of a model of the
+    contract (engine.contract); ``sizes`` -- the lengths of the models' vector parameters
+    (``(("alpha", 4), ("k", 4))`` for a 4-element GMS), which set their numbers of states.
     ``delta``, ``delta_d`` -- the exponents of Eqs. 2.4 and 2.5 folded into the simulate
     kernels when they are 1 or 2 (no run-time test per evaluation); None reads them from
     ``p``. A parameter vector must then carry the same values (:meth:`check_params`).
@@ -46,12 +48,12 @@ class Scene:
     outputs: tuple[str, ...] = ()
     delta: float | None = None
     delta_d: float | None = None
+    sizes: tuple = ()
 
     def __post_init__(self):
-        if self.system not in SYSTEMS:
-            raise ValueError(f"system must be one of {SYSTEMS}, got {self.system!r}")
-        if self.friction not in LAWS:
-            raise ValueError(f"friction must be one of {LAWS}, got {self.friction!r}")
+        registry.system(self.system)     # ModelError (a ValueError) naming what is wrong
+        registry.law(self.friction)
+        object.__setattr__(self, "sizes", tuple(sorted(tuple(kv) for kv in self.sizes)))
         if self.dither not in DITHER_KINDS:
             raise ValueError(f"dither must be one of {DITHER_KINDS}, got {self.dither!r}")
         if self.path not in PATHS:
@@ -66,6 +68,11 @@ class Scene:
             object.__setattr__(self, "delta", None)
             object.__setattr__(self, "delta_d", None)
 
+    @property
+    def n_params(self) -> int:
+        """The length of this scene's parameter vector (engine.registry.layout)."""
+        return registry.scene_layout(self).n_params
+
     def check_params(self, p) -> None:
         """ValueError when ``p`` contradicts an exponent folded into the kernels."""
         for name, index in (("delta", P.DELTA), ("delta_d", P.DELTA_D)):
@@ -77,7 +84,8 @@ class Scene:
 
     @classmethod
     def from_params(cls, p, *, system="slider", friction="lugre", dither="square-velocity",
-                    path="simulate", integrator="dopri5", outputs=(), grid_vd=None) -> Scene:
+                    path="simulate", integrator="dopri5", outputs=(), grid_vd=None,
+                    sizes=()) -> Scene:
         """Scene whose effect flags are off exactly where ``p`` makes them vanish.
 
         ``grid_vd`` -- the swept vd values, if any (bristle damping matters when
@@ -90,7 +98,7 @@ class Scene:
             viscous=bool(p[P.SIGMA2] != 0.0),
             slow_force=bool(p[P.SLOW_A] != 0.0 and system == "slider"),
             outputs=tuple(outputs),
-            delta=_folded(p[P.DELTA]), delta_d=_folded(p[P.DELTA_D]),
+            delta=_folded(p[P.DELTA]), delta_d=_folded(p[P.DELTA_D]), sizes=tuple(sizes),
         )
 
     def with_(self, **changes) -> Scene:

@@ -25,6 +25,7 @@ too.
 from __future__ import annotations
 
 from .. import params as P
+from ..contract import FrictionLaw, LawKernels
 from ..jit import njit
 from .elastoplastic import alpha as ep_alpha
 from .lugre import dz as bristle_rate
@@ -112,3 +113,74 @@ def make_kinks(scene):
         # breakaway matters only inside the band; outside it the law has no hold kink
         out[2] = ((p[P.FS] if stribeck else p[P.FC]) - abs(hold)) if abs(u) < band else 1.0
     return 3, kinks
+
+
+# --- the built-in laws as models of the contract (engine.contract) --------------------------
+
+class _Builtin(FrictionLaw):
+    """LuGre, elasto-plastic, Stribeck and Coulomb through the contract: their one bristle
+    state at ``b.z0`` (the static laws keep it, unused, with rate 0, so that the state
+    layout of every system is the same for every built-in law), the kernels of
+    :func:`make_law` and :func:`make_kinks`."""
+
+    def __init__(self, name, phases, stateless=False, averaged=None):
+        self.name, self.phases, self.stateless = name, phases, stateless
+        self.switch_jumps = stateless
+        self.averaged = averaged
+
+    def build(self, b):
+        scene = b.scene
+        law = make_law(scene)
+        n_switches, kinks = make_kinks(scene)
+        Z = b.z0
+
+        @b.jit(inline="always", error_model="numpy")
+        def rates(u, y, dy, hold, p):
+            dz, F, _ = law(u, y[Z], hold, p)
+            dy[Z] = dz
+            return F
+
+        @b.jit(inline="always", error_model="numpy")
+        def force(u, y, hold, p):
+            _, F, a = law(u, y[Z], hold, p)
+            return F, a
+
+        @b.jit(inline="always", error_model="numpy")
+        def switches(u, y, hold, p, g):
+            kinks(u, y[Z], hold, p, g)
+
+        @b.jit(inline="always", error_model="numpy")
+        def init(p, y):
+            y[Z] = p[P.Z0]
+
+        @b.jit(inline="always", error_model="numpy")
+        def scales(p, out):
+            fc = abs(p[P.FC])
+            fc = fc if fc > 0.0 else 1.0
+            out[Z] = fc / p[P.SIGMA0] if p[P.SIGMA0] > 0.0 else 1.0
+
+        return LawKernels(rates, force, n_switches, switches, init, scales)
+
+    def build_steady(self, b):
+        from .stribeck import make_g
+        g = make_g(b.scene.stribeck and self.name != "coulomb", b.scene.delta)
+        viscous = b.scene.viscous
+
+        @b.jit(error_model="numpy")
+        def steady(u, p):
+            F = g(u, p) * (1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0))
+            if viscous:
+                F += p[P.SIGMA2] * u
+            return F
+        return steady
+
+    def effects(self, scene):
+        return {"elasto-plastic phases": True} if self.name == "elastoplastic" else {}
+
+
+BUILTIN = (
+    _Builtin("coulomb", "alpha", stateless=True, averaged="static"),
+    _Builtin("stribeck", "alpha", stateless=True, averaged="static"),
+    _Builtin("lugre", "band", averaged="lugre"),
+    _Builtin("elastoplastic", "elasto"),
+)

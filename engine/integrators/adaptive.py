@@ -30,6 +30,10 @@ next step size; this driver does everything else, identically for every method.
   Karnopp band in 3x the steps; from rtol 1e-8 on the two agree within 1e-7, and on the
   LuGre hard cases (tests/hard) DP5's results are unchanged, RODAS's within 1e-8 of the
   scipy references as before.)
+- Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
+  law's ``update_modes`` reads the step-end state (which a landing put on the far side of the
+  switch); when a mode changed, the switching functions are evaluated anew and cached stages
+  refreshed as after a dither switch.
 - ``FAILED`` once accepted plus rejected steps reach ``cfg.max_steps`` or the step
   underflows (``h < 1e-14 max(1, |t|)``); ``NON_FINITE`` when it underflows because the
   error is not finite (the state blew up).
@@ -57,6 +61,7 @@ from .problem import (
     CTR_STEPS,
     FRESH_NONE,
     FRESH_START,
+    FRESH_SWITCH,
     Stepper,
     make_sampler,
     record_step,
@@ -71,6 +76,12 @@ UNDERFLOW = 1e-14     # a step below this times max(1, |t|) fails
 # scalar work state: step size, reject flag, next sampling index, short landings in a row
 W_H, W_REJ, W_K, W_SHORT = 0, 1, 2, 3
 W_METHOD = 4          # the method's own slots start here
+
+
+@njit(inline="always", error_model="numpy", refcount=False)
+def _no_modes(t, y, p, sq):
+    """The mode hook of a law without modes (never called)."""
+    return False
 
 
 class Method(NamedTuple):
@@ -114,6 +125,8 @@ def make_stepper(problem, method: Method) -> Stepper:
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     first_sample, emit = make_sampler(problem, dense_eval)
     n_g, n_st = max(n_ev, 1), W_METHOD + method.n_state
+    modal = problem.update_modes is not None
+    update_modes = problem.update_modes if modal else _no_modes
 
     @njit(error_model="numpy")
     def alloc():
@@ -215,6 +228,13 @@ def make_stepper(problem, method: Method) -> Stepper:
             advance(mw)
             for i in range(n_ev):
                 G[0, i] = G[1, i]
+            if modal and update_modes(t_new, y, p, sq):
+                # a mode changed (an element stuck or slipped, on the switch just landed
+                # on): the right-hand side and the switching functions changed with it
+                if n_ev:
+                    events(t_new, y, p, sq, G[0])
+                ctr[CTR_EVALS] += restart(t_new, t1, y, p, sq, FRESH_SWITCH, mw, rtol, atol,
+                                          st)
             ctr[CTR_STEPS] += 1
             if record and rec.shape[0] > 0:   # the check here, not in the call: ~10 %
                 record_step(rec, ctr, cfg, t_new, y)

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..jit import njit
 
-N_ATOL = 4   # room for the per-component absolute tolerances (n_err <= N_ATOL)
+N_ATOL = 72  # room for the per-component absolute tolerances (n_err <= N_ATOL): a system's
+#              states and up to engine.registry.MAX_STATES states of a friction law
 
 #: The run-time settings of the kernels, one numpy record (``cfg``; no recompilation when
 #: they change); the njit code reads them by name, ``cfg.rtol``. Built from
@@ -61,6 +62,9 @@ class Problem(NamedTuple):
     graze: bool = False    # events mark jumps of rhs: probe steps for grazing crossings
     sampling: bool = False # call sample at the instants k * cfg.sample_dt (dense output)
     sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
+    update_modes: Callable | None = None  # update_modes(t, y, p, sq) -> bool: after each
+    #                        accepted step, the law's discrete modes from the step-end state
+    #                        (engine.contract); True when one changed (the right-hand side did)
 
 
 class Stepper(NamedTuple):

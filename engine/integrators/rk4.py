@@ -67,12 +67,19 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
+@njit(inline="always", error_model="numpy", refcount=False)
+def _no_modes(t, y, p, sq):
+    return False
+
+
 def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, rhs, observe = problem.n, problem.rhs, problem.observe
     record, needs_mid, sampling = problem.record, problem.needs_mid, problem.sampling
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     first_sample, emit = make_sampler(problem, dense_eval)
+    modal = problem.update_modes is not None
+    update_modes = problem.update_modes if modal else _no_modes
     a21, a32, a43 = (float(TABLEAU.a[1, 0]), float(TABLEAU.a[2, 1]), float(TABLEAU.a[3, 2]))
     b1, b2, b3, b4 = (float(x) for x in TABLEAU.b)
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
@@ -114,6 +121,8 @@ def make_stepper(problem) -> Stepper:
             ctr[CTR_STEPS] += 1
             ctr[CTR_EVALS] += 4
             observe(t, y0, t_new, y, ym, p, sq, obs)
+            if modal:
+                update_modes(t_new, y, p, sq)   # fixed steps: a switch is seen at a step end
             if sampling and sample_due(state[0], cfg, t_new):
                 coeffs(k1, k2, k3, k4, Q)
                 state[0] = emit(t, h, t_new, y0, y, Q, p, sq, cfg, obs, ctr, rec, state[0],

@@ -4,7 +4,7 @@ State ``y = (e, v, z)`` (indices :data:`E`, :data:`V`, :data:`Z`), ``e`` the spr
 
     de/dtau = v_ref - v
     dv/dtau = e - F(u, z) + f_slow(tau) + f_dither(tau)
-    dz/dtau = law(u, z)                                   (engine.friction.laws)
+    dz/dtau = law(u, z)                      (the friction law's states, from index Z on)
 
     f_slow = A_s sin(Omega_s tau)                  (scene.slow_force)
     square-velocity:  u = v + W sq,  sq = sign(sin(omega tau)) supplied by the integrator
@@ -24,26 +24,18 @@ from __future__ import annotations
 import numpy as np
 
 from .. import params as P
+from ..contract import MechanicalSystem, SystemKernels
 from ..dither import CODE, SINE_FORCE, SINE_VELOCITY, SQUARE_VELOCITY
-from ..friction.laws import make_kinks, make_law
-from ..jit import njit
 
-E, V, Z = 0, 1, 2
-N_BASE = 3
+E, V, Z = 0, 1, 2     # Z: the first state of the friction law (engine.contract layout)
 
 
-def quadrature_index(scene) -> int:
-    """Index of the running integral of F, or -1 when ``F_mean`` is not requested."""
-    return N_BASE if "F_mean" in scene.outputs else -1
-
-
-def make_drive(scene):
+def make_drive(b, slow: bool):
     """njit ``drive(t, y, p, sq) -> (u, fext, hold)``: interface velocity, non-friction
     force on the mass and the stick-holding force."""
-    kind = CODE[scene.dither]
-    slow = scene.slow_force
+    kind = CODE[b.scene.dither]
 
-    @njit(inline="always", error_model="numpy")
+    @b.jit(inline="always", error_model="numpy")
     def drive(t, y, p, sq):
         fext = y[E]
         if slow:
@@ -62,90 +54,48 @@ def make_drive(scene):
     return drive
 
 
-def make_rhs(scene):
-    """njit ``rhs(t, y, p, sq, dy)`` of the slider for ``scene`` (see module docstring)."""
-    drive = make_drive(scene)
-    law = make_law(scene)
-    qf = quadrature_index(scene)
+class Slider(MechanicalSystem):
+    """The paper's slider (module docstring) as a model of the contract (engine.contract)."""
 
-    @njit(error_model="numpy")
-    def rhs(t, y, p, sq, dy):
-        u, fext, hold = drive(t, y, p, sq)
-        dz, F, _ = law(u, y[Z], hold, p)
-        dy[E] = p[P.V_REF] - y[V]
-        dy[V] = fext - F
-        dy[Z] = dz
-        if qf >= 0:
-            dy[qf] = F
-    return rhs
+    name = "slider"
+    state_names = ("e", "v")
+    defaults = P.PAPER_DEFAULTS
+
+    def build(self, b):
+        drive = make_drive(b, b.scene.slow_force)
+
+        @b.jit(inline="always", error_model="numpy")
+        def dynamics(t, y, p, sq, u, fext, F, dy):
+            dy[E] = p[P.V_REF] - y[V]
+            dy[V] = fext - F
+
+        @b.jit(inline="always", error_model="numpy")
+        def position(t, y, p):
+            """v_ref t - e, the slider displacement (up to a constant)."""
+            return p[P.V_REF] * t - y[E]
+
+        @b.jit(inline="always", error_model="numpy")
+        def velocity(t, y, p, sq):
+            """v, the slider velocity (dither not included)."""
+            return y[V]
+
+        @b.jit(inline="always", error_model="numpy")
+        def init(p, y):
+            y[E], y[V] = p[P.E0], p[P.V0]
+
+        @b.jit(inline="always", error_model="numpy")
+        def scales(p, out):
+            """``fc`` (the spring force at break-away) and ``max(|v_ref|, W)`` (1 when both
+            are 0), for ``Settings(atol_units="natural")``; the law scales its own states."""
+            fc = abs(p[P.FC])
+            vs = max(abs(p[P.V_REF]), abs(p[P.W]))
+            out[E] = fc if fc > 0.0 else 1.0
+            out[V] = vs if vs > 0.0 else 1.0
+
+        return SystemKernels(drive, dynamics, position, velocity, init, scales)
 
 
 def make_interface(scene):
-    """njit ``interface(t, y, p, sq) -> (u, F, alpha)`` for observables."""
-    drive = make_drive(scene)
-    law = make_law(scene)
-
-    @njit(inline="always", error_model="numpy")
-    def interface(t, y, p, sq):
-        u, _, hold = drive(t, y, p, sq)
-        _, F, a = law(u, y[Z], hold, p)
-        return u, F, a
-    return interface
-
-
-def make_events(scene):
-    """``(n_events, events(t, y, p, sq, g))``: the law's kink functions along the trajectory."""
-    drive = make_drive(scene)
-    n_events, kinks = make_kinks(scene)
-
-    @njit(error_model="numpy")
-    def events(t, y, p, sq, g):
-        u, _, hold = drive(t, y, p, sq)
-        kinks(u, y[Z], hold, p, g)
-    return n_events, events
-
-
-def make_position(scene):
-    """njit ``position(t, y, p) = v_ref t - e``, the slider displacement (up to a constant)."""
-    @njit(inline="always", error_model="numpy")
-    def position(t, y, p):
-        return p[P.V_REF] * t - y[E]
-    return position
-
-
-def make_velocity(scene):
-    """njit ``velocity(t, y, p, sq) = v``, the slider velocity (dither not included)."""
-    @njit(inline="always", error_model="numpy")
-    def velocity(t, y, p, sq):
-        return y[V]
-    return velocity
-
-
-def error_size(scene) -> int:
-    """Leading components under error control: ``(e, v, z)``; the quadrature of F is not."""
-    return N_BASE
-
-
-def make_scales(scene):
-    """njit ``scales(p, out)``: natural scales of ``(e, v, z)`` -- ``fc`` (the spring force
-    at break-away), ``max(|v_ref|, W)`` (1 when both are 0), ``fc / sigma0`` (the bristle
-    deflection at the Coulomb level); used by ``Settings(atol_units="natural")``."""
-    @njit(error_model="numpy")
-    def scales(p, out):
-        fc = abs(p[P.FC])
-        vs = max(abs(p[P.V_REF]), abs(p[P.W]))
-        out[E] = fc if fc > 0.0 else 1.0
-        out[V] = vs if vs > 0.0 else 1.0
-        out[Z] = out[E] / p[P.SIGMA0] if p[P.SIGMA0] > 0.0 else 1.0
-    return scales
-
-
-def make_init(scene):
-    """njit ``init(p, y)``: ``(e0, v0, z0)`` from ``p``, quadrature states zeroed."""
-    n = N_BASE + (quadrature_index(scene) >= 0)
-
-    @njit(inline="always", error_model="numpy")
-    def init(p, y):
-        y[:] = 0.0
-        y[E], y[V], y[Z] = p[P.E0], p[P.V0], p[P.Z0]
-    return n, init
+    """njit ``interface(t, y, p, sq) -> (u, F, alpha)`` of a slider scene (for plots)."""
+    from . import make_system
+    return make_system(scene).interface

@@ -1,0 +1,78 @@
+"""Dahl's friction law (P. R. Dahl, 1968; the form of issue 35), through the model contract.
+
+    dz/dt = u sgn(r) |r|**dahl_alpha,    r = 1 - sigma0 z sgn(u) / fc
+    F     = sigma0 z + sigma2 u                          (sigma2 u only with the viscous effect)
+
+``u`` is the interface velocity (``v + W sin(omega tau)`` on the slider with velocity dither).
+With ``dahl_alpha = 1``, ``dz/dt = u - sigma0 |u| z / fc``: LuGre with ``g = fc`` and
+``sigma1 = 0`` (tests/engine/test_models_dahl.py checks it). The deflection relaxes onto
+``z_ss = fc sgn(u) / sigma0``; below ``dahl_alpha = 1`` it reaches it in finite time (the
+switch ``r = 0`` is landed on; ``sgn(0) = 0`` then holds it there). Switches: ``u`` (the
+corner of ``sgn(u)``) and ``r``. Phases as LuGre's: stick is ``|u| < stick_band``.
+Steady state: ``F_ss(u) = fc sgn(u) + sigma2 u`` (the averaged path's curve).
+"""
+from __future__ import annotations
+
+from .. import params as P
+from ..contract import FrictionLaw, LawKernels, Param
+
+
+class Dahl(FrictionLaw):
+    name = "dahl"
+    params = {"dahl_alpha": Param(1.0, "1", "Dahl's shape exponent (1: LuGre with g = fc, "
+                                  "sigma1 = 0)", lo=0.0, hi=10.0, lo_open=True)}
+    phases = "band"
+
+    def build(self, b):
+        Z, ia, viscous = b.z0, b.ix["dahl_alpha"], b.scene.viscous
+
+        @b.jit(inline="always", error_model="numpy")
+        def rate(u, z, p):
+            su = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)
+            r = 1.0 - p[P.SIGMA0] * z * su / p[P.FC]
+            sr = 1.0 if r > 0.0 else (-1.0 if r < 0.0 else 0.0)
+            return u * sr * abs(r) ** p[ia]
+
+        @b.jit(inline="always", error_model="numpy")
+        def force_of(u, z, p):
+            F = p[P.SIGMA0] * z
+            if viscous:
+                F += p[P.SIGMA2] * u
+            return F
+
+        @b.jit(inline="always", error_model="numpy")
+        def rates(u, y, dy, hold, p):
+            dy[Z] = rate(u, y[Z], p)
+            return force_of(u, y[Z], p)
+
+        @b.jit(inline="always", error_model="numpy")
+        def force(u, y, hold, p):
+            return force_of(u, y[Z], p), (0.0 if abs(u) < p[P.STICK_BAND] else 1.0)
+
+        @b.jit(inline="always", error_model="numpy")
+        def switches(u, y, hold, p, g):
+            g[0] = u
+            su = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)
+            g[1] = 1.0 - p[P.SIGMA0] * y[Z] * su / p[P.FC]
+
+        @b.jit(inline="always", error_model="numpy")
+        def init(p, y):
+            y[Z] = p[P.Z0]
+
+        @b.jit(inline="always", error_model="numpy")
+        def scales(p, out):
+            fc = abs(p[P.FC])
+            out[Z] = (fc if fc > 0.0 else 1.0) / p[P.SIGMA0]
+
+        return LawKernels(rates, force, 2, switches, init, scales)
+
+    def build_steady(self, b):
+        viscous = b.scene.viscous
+
+        @b.jit(error_model="numpy")
+        def steady(u, p):
+            F = p[P.FC] * (1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0))
+            if viscous:
+                F += p[P.SIGMA2] * u
+            return F
+        return steady
