@@ -16,10 +16,12 @@ from . import downloads, extra_pages, pages
 from .base import NotFound
 from .explorer import Explorer
 from .live import LiveCatalogue
+from .lru import LRU
 from .renders import MapCache
 from .snapshot import Cubes
 
 ID = r"([0-9a-f]{12})"
+PLANS = 256   # plan summaries kept (each a few hundred bytes)
 log = logging.getLogger("ditherlab")
 
 
@@ -35,7 +37,7 @@ class Context:
         self.cubes = Cubes()
         self.maps = MapCache()
         self.explorer = Explorer()
-        self._plans: dict = {}
+        self._plans = LRU(PLANS)   # plan summaries by sweep id
 
     def cube_path(self, sweep_id: str) -> Path:
         from store import SweepDir

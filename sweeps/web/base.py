@@ -1,6 +1,8 @@
-"""What every page shares: GET and HEAD only (405 otherwise), the token check, the security
-headers, one-sentence errors, templates (jinja2, every value escaped), and the parsing of
-selections from the query string (``sel.AXIS=VALUE``)."""
+"""What every page shares: GET and HEAD only (405 otherwise), the token check (but on
+``public`` pages), the security headers, one-sentence errors (a fault's status from the
+table of sweeps.web.errors, or a ``tornado.web.HTTPError``'s; its sentence the body),
+templates (jinja2, every value escaped), and the parsing of selections from the query
+string (``sel.AXIS=VALUE``)."""
 from __future__ import annotations
 
 import json
@@ -10,7 +12,10 @@ from pathlib import Path
 import jinja2
 import tornado.web
 
-from ..errors import RefusedError, UserError
+from tornado.httputil import responses
+from tornado.web import HTTPError
+
+from .errors import SENTENCES, status_of
 from .security import COOKIE, CSP, HEADERS, bearer, token_matches
 
 HERE = Path(__file__).parent
@@ -19,17 +24,10 @@ TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE / "templates"
 AXES = ("W", "omega", "v_ref", "v_d")
 
 
-class Refused(Exception):
-    """A request answered with ``status`` and one sentence."""
-
-    def __init__(self, status: int, sentence: str):
-        super().__init__(sentence)
-        self.status, self.sentence = status, sentence
-
-
 class Base(tornado.web.RequestHandler):
     SUPPORTED_METHODS = ("GET", "HEAD")
     csp = CSP
+    public = False   # True: answered without the token (nothing private in it)
 
     def initialize(self, ctx):
         self.ctx = ctx
@@ -42,7 +40,7 @@ class Base(tornado.web.RequestHandler):
 
     def prepare(self):
         token = self.ctx.token
-        if token is None:
+        if token is None or self.public:
             return
         given = self.get_query_argument("token", None)
         if given is not None and token_matches(given, token):
@@ -54,40 +52,32 @@ class Base(tornado.web.RequestHandler):
             return
         shown = bearer(self.request.headers.get("Authorization")) or self.get_cookie(COOKIE)
         if not token_matches(shown, token):
-            raise Refused(401, "this server needs its token: open the address printed at its "
-                               "start (…?token=…) or send 'Authorization: Bearer TOKEN'")
+            raise HTTPError(401, "this server needs its token: open the address printed at "
+                            "its start (…?token=…) or send 'Authorization: Bearer TOKEN'")
 
     def head(self, *args):
         return self.get(*args)
 
     def write_error(self, status_code, **kwargs):
-        exc = kwargs.get("exc_info", (None, None))[1]
-        if isinstance(exc, tornado.web.HTTPError) and status_code == 405:
-            sentence = "this server only reads: GET and HEAD are answered"
-        elif status_code == 404:
-            sentence = "not found"
+        """The body of every error: one sentence. A fault of sweeps.web.errors' table is
+        answered with its status and message; an ``HTTPError`` with its own."""
+        exc = kwargs.get("exc_info", (None, None, None))[1]
+        status = status_of(exc)
+        if status is not None:
+            self.set_status(status)
+            sentence = str(exc)
+        elif isinstance(exc, HTTPError) and exc.log_message:
+            sentence = exc.log_message
         else:
-            sentence = f"{self._reason}"
+            sentence = SENTENCES.get(status_code, responses.get(status_code, "error"))
         self.set_header("Content-Type", "text/plain; charset=utf-8")
-        self.finish(sentence + "\n")
+        self.finish(self.ctx.shown(sentence).replace("\n", " ") + "\n")
 
-    def _handle_request_exception(self, e):
-        if isinstance(e, Refused):
-            self._reply(e.status, e.sentence)
-        elif isinstance(e, (RefusedError,)):
-            self._reply(400, str(e))
-        elif isinstance(e, UserError):
-            self._reply(409, self.ctx.shown(str(e)))
-        else:
-            super()._handle_request_exception(e)
-
-    def _reply(self, status: int, sentence: str):
-        if self._finished:
+    def log_exception(self, typ, value, tb):
+        """A refusal is answered, not logged (the access log has its status); a bug is."""
+        if isinstance(value, HTTPError) or status_of(value) is not None:
             return
-        self.clear()
-        self.set_status(status)
-        self.set_header("Content-Type", "text/plain; charset=utf-8")
-        self.finish(sentence.replace("\n", " ") + "\n")
+        super().log_exception(typ, value, tb)
 
     def page(self, template: str, **values):
         self.set_header("Content-Type", "text/html; charset=utf-8")
@@ -100,7 +90,7 @@ class Base(tornado.web.RequestHandler):
     def sweep_or_404(self, sweep_id: str) -> dict:
         row = self.ctx.live.find(sweep_id)
         if row is None:
-            raise Refused(404, f"no sweep {sweep_id} in this store")
+            raise HTTPError(404, f"no sweep {sweep_id} in this store")
         return row
 
     def selection(self) -> dict[str, float]:
@@ -111,28 +101,27 @@ class Base(tornado.web.RequestHandler):
             if not values:
                 continue
             if len(set(values)) > 1:
-                raise Refused(400, f"sel.{axis}: given twice; a selection takes one value "
-                                   "per axis")
+                raise HTTPError(400, f"sel.{axis}: given twice; a selection takes one value "
+                                "per axis")
             try:
                 x = float(values[0])
             except ValueError:
-                raise Refused(400, f"sel.{axis}: expected a number, got {values[0][:40]!r}")
+                raise HTTPError(400, f"sel.{axis}: expected a number, got {values[0][:40]!r}")
             if math.isnan(x):
-                raise Refused(400, f"sel.{axis}: expected a number, got NaN")
+                raise HTTPError(400, f"sel.{axis}: expected a number, got NaN")
             sel[axis] = x
         unknown = [k for k in self.request.query_arguments
                    if k.startswith("sel.") and k[4:] not in AXES]
         if unknown:
-            raise Refused(400, f"{unknown[0][:40]}: unknown axis; the axes are "
-                               f"{', '.join(AXES)}")
+            raise HTTPError(400, f"{unknown[0][:40]}: unknown axis; the axes are "
+                            f"{', '.join(AXES)}")
         return sel
 
 
 class NotFound(Base):
     """Every address no route knows: 404 for GET/HEAD, 405 for any other method."""
 
-    def prepare(self):   # no token needed to learn that nothing is here
-        pass
+    public = True   # no token needed to learn that nothing is here
 
     def get(self, *args):
-        raise Refused(404, "not found")
+        raise HTTPError(404)

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import asyncio
 
-from ..errors import RefusedError, UserError
-from .base import Base, Refused
+from tornado.web import HTTPError
+
+from .base import Base
 from .pages import in_executor
-from .errors import Busy
 from .renders import MEDIA
 
 MAX_CELLS = 2_000_000
@@ -20,16 +20,12 @@ def _snapshot(ctx, sweep_id: str):
 
     path = ctx.cube_path(sweep_id)
     if not path.exists():
-        raise Refused(404, f"sweep {sweep_id} has no cube yet")
+        raise HTTPError(404, f"sweep {sweep_id} has no cube yet")
     try:
         snap = ctx.cubes.get(path)
-        check_cube_of(snap.ds, sweep_id, path)
     except FileNotFoundError:
-        raise Refused(404, f"sweep {sweep_id} has no cube yet") from None
-    except OverflowError as exc:
-        raise Refused(413, str(exc)) from None
-    except UserError as exc:
-        raise Refused(409, ctx.shown(str(exc))) from None
+        raise HTTPError(404, f"sweep {sweep_id} has no cube yet") from None
+    check_cube_of(snap.ds, sweep_id, path)
     return snap
 
 
@@ -47,12 +43,12 @@ def _query(ctx, sweep_id: str, var: str | None, sel: dict, fmt: str) -> bytes:
 
     ds = _snapshot(ctx, sweep_id).ds
     if var and var not in ds.data_vars:
-        raise Refused(400, f"var: the cube has no variable {var[:40]!r}")
+        raise HTTPError(400, f"var: the cube has no variable {var[:40]!r}")
     cells = selection_size(ds, var, sel)
     if cells > MAX_CELLS:
-        raise Refused(413, f"the selection has {cells} cells, over the {MAX_CELLS} the web "
-                           "view serves; fix more axes with sel.AXIS=VALUE or use "
-                           "`ditherlab query`")
+        raise HTTPError(413, f"the selection has {cells} cells, over the {MAX_CELLS} the web "
+                        "view serves; fix more axes with sel.AXIS=VALUE or use "
+                        "`ditherlab query`")
     return query_text(ds, var, sel, fmt).encode()
 
 
@@ -74,21 +70,15 @@ class MapImage(Base):
         sel = self.selection()
         pick = self.get_query_argument("pick", "")
         if pick and (not pick.isdigit() or not 1 <= int(pick) <= 50):
-            raise Refused(400, f"pick: 1 to 50 friction curves, got {pick[:40]!r}")
+            raise HTTPError(400, f"pick: 1 to 50 friction curves, got {pick[:40]!r}")
         if pick and kind != "friction":
-            raise Refused(400, "pick: applies to the friction map only")
+            raise HTTPError(400, "pick: applies to the friction map only")
         snap = await in_executor(_snapshot, self.ctx, sweep_id)
         npick = int(pick) if pick else None
         key = (sweep_id, snap.key, kind, tuple(sorted(sel.items())), npick, fmt)
-        try:
-            maps = self.ctx.maps
-            fut = maps.get(key, lambda: maps.draw(snap.ds, kind, sel, npick, fmt))
-        except Busy as exc:
-            raise Refused(503, str(exc)) from None
-        try:
-            data = await asyncio.wrap_future(fut)
-        except RefusedError as exc:
-            raise Refused(400, str(exc)) from None
+        maps = self.ctx.maps
+        fut = maps.get(key, lambda: maps.draw(snap.ds, kind, sel, npick, fmt))
+        data = await asyncio.wrap_future(fut)
         self.set_header("Content-Type", MEDIA[fmt])
         if self.get_query_argument("download", "") == "1":
             self.set_header("Content-Disposition",

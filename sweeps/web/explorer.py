@@ -12,11 +12,11 @@ sweep. One computation at a time (:class:`Busy` otherwise) and at most
 from __future__ import annotations
 
 import threading
-from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 
 from ..errors import RefusedError
 from .errors import Busy
+from .lru import LRU
 
 MAX_AXIS = 400
 PARAMS = ("sigma0", "sigma1", "sigma2", "vs", "fc", "fs")
@@ -91,7 +91,7 @@ class Explorer:
 
     def __init__(self):
         self.pool = ThreadPoolExecutor(1, thread_name_prefix="ditherlab-explorer")
-        self._results: OrderedDict[str, Future] = OrderedDict()
+        self._results = LRU(KEEP)   # futures of cubes by spec
         self._running: str | None = None
         self._lock = threading.Lock()
 
@@ -102,24 +102,21 @@ class Explorer:
 
     def cube(self, key: str, spec_dict: dict) -> Future:
         with self._lock:
-            if key in self._results:
-                self._results.move_to_end(key)
-                return self._results[key]
+            held = self._results.get(key)
+            if held is not None:
+                return held
             if self._running is not None:
                 raise Busy("another explorer computation is running; try again in a moment")
             self._running = key
             fut = self.pool.submit(self._compute, key, spec_dict)
-            self._results[key] = fut
-            while len(self._results) > KEEP:
-                self._results.popitem(last=False)
+            self._results.put(key, fut)
             return fut
 
     def _compute(self, key: str, spec_dict: dict):
         try:
             return compute(spec_dict)
         except BaseException:
-            with self._lock:
-                self._results.pop(key, None)   # a failure is not kept
+            self._results.pop(key)   # a failure is not kept
             raise
         finally:
             with self._lock:

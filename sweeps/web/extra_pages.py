@@ -9,9 +9,10 @@ import json
 import os
 from urllib.parse import urlencode
 
+from tornado.web import HTTPError
+
 from ..errors import RefusedError
-from .base import HERE, Base, Refused
-from .errors import Busy
+from .base import HERE, Base
 from .explorer import DEFAULTS, DITHERS, FRICTIONS, MAX_AXIS, PARAMS, curves_wanted
 from .explorer import spec_from_query
 from .security import GALLERY_CSP
@@ -24,20 +25,18 @@ GALLERY_TYPES = {".png": "image/png", ".svg": "image/svg+xml", ".pdf": "applicat
 
 
 class Static(Base):
-    def prepare(self):   # the scripts and styles hold nothing private
-        pass
+    public = True   # the scripts and styles hold nothing private
 
     def get(self, name):
         if name not in STATIC:
-            raise Refused(404, "not found")
+            raise HTTPError(404)
         self.set_header("Content-Type", STATIC_TYPES[os.path.splitext(name)[1]])
         self.set_header("Cache-Control", "max-age=300")
         self.finish(STATIC[name])
 
 
 class NoIcon(Base):
-    def prepare(self):
-        pass
+    public = True
 
     def get(self):
         self.set_status(204)   # no icon: an empty answer, not a 404 in the console
@@ -74,14 +73,11 @@ class ExplorerImage(Base):
         spec = spec_from_query(fields)
         curves = curves_wanted(fields)
         key = hashlib.sha256(json.dumps(spec, sort_keys=True).encode()).hexdigest()
+        cube = await asyncio.wrap_future(self.ctx.explorer.cube(key, spec))
         maps = self.ctx.maps
-        try:
-            cube = await asyncio.wrap_future(self.ctx.explorer.cube(key, spec))
-            draw = {"stability": lambda: maps.draw(cube, "stability", {}, None, "png"),
-                    "friction": lambda: maps.draw(cube, "friction", {}, curves, "png")}[kind]
-            fut = maps.get(("explorer", key, kind, curves), draw)
-        except Busy as exc:
-            raise Refused(503, str(exc)) from None
+        draw = {"stability": lambda: maps.draw(cube, "stability", {}, None, "png"),
+                "friction": lambda: maps.draw(cube, "friction", {}, curves, "png")}[kind]
+        fut = maps.get(("explorer", key, kind, curves), draw)
         data = await asyncio.wrap_future(fut)
         self.set_header("Content-Type", "image/png")
         self.finish(data)
@@ -100,13 +96,14 @@ class Gallery(Base):
     def get(self, name=None):
         folder = self.ctx.gallery_dir()
         if folder is None:
-            raise Refused(404, "no gallery in this store (`ditherlab gallery -o STORE/gallery` "
-                               "builds one, or start the server with --gallery DIR)")
+            raise HTTPError(404, "no gallery in this store (`ditherlab gallery -o "
+                            "STORE/gallery` builds one, or start the server with "
+                            "--gallery DIR)")
         files = {f: folder / f for f in os.listdir(folder)
                  if not f.startswith(".") and os.path.splitext(f)[1] in GALLERY_TYPES}
         if name is None:
             name = "index.html"
         if name not in files or not files[name].is_file() or files[name].is_symlink():
-            raise Refused(404, "not found")
+            raise HTTPError(404)
         self.set_header("Content-Type", GALLERY_TYPES[os.path.splitext(name)[1]])
         self.finish(files[name].read_bytes())

@@ -13,7 +13,10 @@ import threading
 import time
 from pathlib import Path
 
+from .lru import LRU
+
 REFRESH_S = 0.25
+PAGES = 64   # rendered pages kept (pages.py), forgotten at every catalogue change
 IDLE_REFRESH_S = 2.0   # unchanged files: read again this often (a runner may have died)
 
 
@@ -26,7 +29,7 @@ class LiveCatalogue:
         self._gone: dict[str, int] = {}
         self._read_at = -1e9
         self._files = None
-        self.pages: dict = {}         # rendered pages by (cursor, arguments): pages.py
+        self.pages = LRU(PAGES)       # rendered pages by (cursor, arguments): pages.py
         self._servers: list = []
         self._warnings: dict = {}       # cube path -> (stat key, warnings): overview cache
         self._lock = threading.Lock()

@@ -5,8 +5,9 @@ from __future__ import annotations
 import json
 
 from tornado.ioloop import IOLoop
+from tornado.web import HTTPError
 
-from .base import AXES, Base, Refused
+from .base import AXES, Base
 from .sweep_view import sweep_view
 
 SORTS = ("created", "name", "state", "done", "path", "finished", "sweep_id")
@@ -29,7 +30,7 @@ class Catalogue(Base):
         sort = self.get_query_argument("sort", "created")
         desc = self.get_query_argument("desc", "1" if sort == "created" else "") == "1"
         if sort not in SORTS:
-            raise Refused(400, f"sort: one of {', '.join(SORTS)}, got {sort[:40]!r}")
+            raise HTTPError(400, f"sort: one of {', '.join(SORTS)}, got {sort[:40]!r}")
         live = self.ctx.live
         cursor, rows, servers = await in_executor(live.snapshot)
         key = (cursor, q, state, sort, desc)
@@ -37,9 +38,7 @@ class Catalogue(Base):
         if html is None:   # one rendering per catalogue change and view, for every reader
             html = await in_executor(_render, rows, servers, q, state, sort, desc, cursor,
                                      str(self.ctx.root))
-            if len(live.pages) > 64:
-                live.pages.clear()
-            live.pages[key] = html
+            live.pages.put(key, html)
         self.set_header("Content-Type", "text/html; charset=utf-8")
         self.finish(html)
 
@@ -71,16 +70,14 @@ class ApiSweeps(Base):
         try:
             after = int(self.get_query_argument("after", "0"))
         except ValueError:
-            raise Refused(400, "after: expected the integer cursor of the last answer")
+            raise HTTPError(400, "after: expected the integer cursor of the last answer")
         live = self.ctx.live
         data = await in_executor(live.changes, after)
         key = ("api", data["cursor"], after)
         body = live.pages.get(key)
         if body is None:   # serialised once per catalogue change and cursor
             body = await in_executor(lambda: json.dumps(data, allow_nan=False, default=str))
-            if len(live.pages) > 64:
-                live.pages.clear()
-            live.pages[key] = body
+            live.pages.put(key, body)
         self.set_header("Content-Type", "application/json")
         self.finish(body)
 
@@ -98,9 +95,9 @@ class SweepPage(Base):
         sel = self.selection()
         pick = self.get_query_argument("pick", "5")
         if not pick.isdigit() or not 1 <= int(pick) <= 50:
-            raise Refused(400, f"pick: 1 to 50 friction curves, got {pick[:40]!r}")
+            raise HTTPError(400, f"pick: 1 to 50 friction curves, got {pick[:40]!r}")
         var = self.get_query_argument("var", "")
         view = await in_executor(sweep_view, self.ctx, sweep_id, sel)
         if var and var not in view["variables_names"]:
-            raise Refused(400, f"var: the cube has no variable {var[:40]!r}")
+            raise HTTPError(400, f"var: the cube has no variable {var[:40]!r}")
         self.page("sweep.html", v=view, sel=sel, pick=int(pick), var=var, axes=AXES)

@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import tempfile
 import threading
-from collections import OrderedDict
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 from .errors import Busy
+from .lru import LRU
 
 RENDER_THREADS = 2   # the explorer's chart and curves are drawn side by side on 2 cores
 MAX_WAITING = 32
@@ -109,10 +109,9 @@ class MapCache:
     def __init__(self, threads: int = RENDER_THREADS, max_waiting: int = MAX_WAITING,
                  cache_bytes: int = CACHE_BYTES):
         self.pool = ThreadPoolExecutor(threads, thread_name_prefix="ditherlab-map")
-        self.max_waiting, self.cache_bytes = max_waiting, cache_bytes
-        self._done: OrderedDict[tuple, bytes] = OrderedDict()
+        self.max_waiting = max_waiting
+        self._done = LRU(cache_bytes, weight=len)   # images by key, CACHE_BYTES in all
         self._pending: dict[tuple, Future] = {}
-        self._size = 0
         self._lock = threading.Lock()
         self.drawn = 0          # maps drawn (the tests count them)
         self.draw = Drawer(threads)    # render(...) in a drawing process
@@ -120,10 +119,10 @@ class MapCache:
     def get(self, key: tuple, draw) -> Future:
         """A future of the bytes for ``key``; ``draw()`` makes them if nobody has."""
         with self._lock:
-            if key in self._done:
-                self._done.move_to_end(key)
+            data = self._done.get(key)
+            if data is not None:
                 done: Future = Future()
-                done.set_result(self._done[key])
+                done.set_result(data)
                 return done
             if key in self._pending:
                 return self._pending[key]
@@ -143,8 +142,5 @@ class MapCache:
         with self._lock:   # cached before it stops pending: never drawn twice
             self._pending.pop(key, None)
             self.drawn += 1
-            self._done[key] = data
-            self._size += len(data)
-            while self._size > self.cache_bytes and len(self._done) > 1:
-                self._size -= len(self._done.popitem(last=False)[1])
+            self._done.put(key, data)
         return data

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import io
 import os
-import threading
-from collections import OrderedDict
 from pathlib import Path
+
+from .lru import LRU
 
 MAX_CUBE_BYTES = 1 << 30        # a bigger cube is downloaded with the CLI, not served
 KEEP = 8                        # cubes held in memory
@@ -58,23 +58,14 @@ class Cubes:
     """The last ``KEEP`` cubes read, by path; thread-safe."""
 
     def __init__(self, keep: int = KEEP):
-        self.keep = keep
-        self._held: OrderedDict[Path, CubeSnapshot] = OrderedDict()
-        self._lock = threading.Lock()
+        self._held = LRU(keep)   # snapshots by path
 
     def get(self, path: Path) -> CubeSnapshot:
         """The cube at ``path`` as published now (read again only when it changed)."""
         key = stat_key(os.stat(path))   # FileNotFoundError: no cube yet
-        with self._lock:
-            held = self._held.get(path)
-            if held is not None and held.key == key:
-                self._held.move_to_end(path)
-                return held
-        key, data = read_cube_bytes(path)
-        snap = CubeSnapshot(key, data)
-        with self._lock:
-            self._held[path] = snap
-            self._held.move_to_end(path)
-            while len(self._held) > self.keep:
-                self._held.popitem(last=False)
+        held = self._held.get(path)
+        if held is not None and held.key == key:
+            return held
+        snap = CubeSnapshot(*read_cube_bytes(path))
+        self._held.put(path, snap)
         return snap

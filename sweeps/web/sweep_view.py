@@ -9,7 +9,7 @@ from urllib.parse import urlencode
 
 import numpy as np
 
-from .base import AXES, Refused
+from .base import AXES
 from .tomltext import spec_toml
 
 PLANES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W"), "friction": ("W", "v_ref")}
@@ -111,7 +111,6 @@ def _provenance(ds) -> list[tuple[str, str]]:
 
 def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     """Everything the sweep page of ``sweep_id`` (looked up in the catalogue) shows."""
-    from ..errors import UserError
     from ..lookup import check_cube_of
     from ..overview import sweep_detail
 
@@ -119,10 +118,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     ds = None
     if cube_path.exists():
         ds = ctx.cubes.get(cube_path).ds
-        try:
-            check_cube_of(ds, sweep_id, cube_path)
-        except UserError as exc:
-            raise Refused(409, ctx.shown(str(exc))) from None
+        check_cube_of(ds, sweep_id, cube_path)
     detail = sweep_detail(ctx.root, sweep_id, ds)
     from ..estimates.time_history import recorded
 
@@ -144,8 +140,10 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     return view
 
 
-def plan_cached(cache: dict, sweep_id: str, spec: dict):
-    """The plan summary of a sweep's spec, computed once per server."""
-    if sweep_id not in cache:
-        cache[sweep_id] = _plan(json.loads(json.dumps(spec)))
-    return cache[sweep_id]
+def plan_cached(cache, sweep_id: str, spec: dict):
+    """The plan summary of a sweep's spec, computed once per server (``cache``: an LRU)."""
+    summary = cache.get(sweep_id)
+    if summary is None:
+        summary = _plan(json.loads(json.dumps(spec)))
+        cache.put(sweep_id, summary)
+    return summary

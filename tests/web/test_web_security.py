@@ -237,3 +237,20 @@ def test_a_cube_of_another_sweep_is_refused_without_the_servers_folders(web_stor
         assert status == 409, (path, status, text)
         assert f"the cube at {avg}/cube.nc is sweep {tiny}'s, not {avg}'s" in text, text
         assert str(tmp_path) not in text, text
+
+
+def test_the_one_cache_keeps_the_most_recent_entries_within_its_weight():
+    from sweeps.web.lru import LRU
+
+    counted = LRU(2)
+    for k in "abc":
+        counted.put(k, k.upper())
+    assert "a" not in counted and counted.get("b") == "B"   # b is now the most recent
+    counted.put("d", "D")
+    assert "c" not in counted and len(counted) == 2
+    weighed = LRU(10, weight=len)
+    weighed.put("x", b"12345678")
+    weighed.put("y", b"123")      # 11 bytes: the older goes
+    assert "x" not in weighed and weighed.get("y") == b"123"
+    weighed.put("big", b"0" * 50)   # over the budget alone: kept, being the last
+    assert len(weighed) == 1 and weighed.pop("big") == b"0" * 50 and len(weighed) == 0
