@@ -38,6 +38,16 @@ HBM = {
 BY_PATH = {"simulate": SIMULATE, "averaged": AVERAGED, "hbm": HBM}
 
 
-def describe(path: str, name: str) -> tuple[str, str]:
+def path_outputs(path: str, system: str = "slider") -> dict:
+    """name -> (long_name, units) of every output of ``path`` on ``system``: the simulate
+    path adds the system's own observables (engine.contract.MechanicalSystem.outputs,
+    e.g. the servo's hunting amplitude)."""
+    if path != "simulate":
+        return BY_PATH[path]
+    from . import registry
+    return {**SIMULATE, **(registry.system(system).outputs or {})}
+
+
+def describe(path: str, name: str, system: str = "slider") -> tuple[str, str]:
     """(long_name, units) of output ``name`` on analysis ``path``."""
-    return BY_PATH[path][name]
+    return path_outputs(path, system)[name]

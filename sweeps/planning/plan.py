@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from engine import params as P
+from engine import registry
 from engine.scene import Scene
 
 from ..spec.accuracy import Numerics, numerics
@@ -80,8 +81,7 @@ class Plan:
         eff = {"stribeck": s.stribeck, "bristle damping": s.bristle_damping,
                "viscous term": s.viscous, "slow force": s.slow_force,
                "dither": s.dither != "none"}
-        if s.friction == "elastoplastic":
-            eff["elasto-plastic phases"] = True
+        eff.update(registry.law(s.friction).effects(s))
         return eff
 
     @property
@@ -110,7 +110,8 @@ def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
     # the simulate path compiles the dither in effect (none when W = 0 everywhere)
     dither = spec.grid_facts.dither if spec.method == "simulate" else spec.dither
     return Scene.from_params(p, system=spec.system, friction=spec.friction, dither=dither,
-                             path=spec.method, integrator=integrator, outputs=outputs)
+                             path=spec.method, integrator=integrator, outputs=outputs,
+                             sizes=spec.model_sizes)
 
 
 def interleaved_blocks(n_points: int, n_blocks: int) -> list[np.ndarray]:
@@ -165,7 +166,7 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     """Plan ``spec`` (at its own accuracy, or at ``level`` for estimates)."""
     p = base_params(spec)
     num = numerics(spec, float(p[P.SIGMA0]), level)
-    outputs = resolve_outputs(spec.method, spec.outputs)
+    outputs = resolve_outputs(spec.method, spec.outputs, spec.system)
     g = spec.grid_facts
     costs = point_costs(spec, g.coords)
     n = math.prod(g.shape)

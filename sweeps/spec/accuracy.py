@@ -130,7 +130,8 @@ def promise(level: str, output: str, friction: str | None = None) -> float:
 def needs_phase_accuracy(spec: Spec) -> bool:
     """True when the spec asks for a share that hinges on the sliding gap (PHASE_LEVELS)."""
     return (spec.method == "simulate" and spec.friction == "elastoplastic"
-            and any(o in PHASE_OUTPUTS for o in resolve_outputs(spec.method, spec.outputs)))
+            and any(o in PHASE_OUTPUTS
+                    for o in resolve_outputs(spec.method, spec.outputs, spec.system)))
 
 
 # RK4: steps per square-wave half-period (per period for a sine), and the step without

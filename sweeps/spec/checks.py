@@ -15,7 +15,7 @@ from .models import AXES, Range, Spec
 def check_choices(spec: Spec) -> list[str]:
     """Faults in the combination of choices, without the grid's values."""
     problems = []
-    allowed = allowed_outputs(spec.method)
+    allowed = allowed_outputs(spec.method, spec.system)
     for name in spec.outputs or ():
         if name not in allowed:
             problems.append(f"outputs: {show(name)} is not produced by method={spec.method!r}; "
@@ -55,7 +55,7 @@ def _check_refine(spec: Spec) -> list[str]:
         return [f"refine: the {spec.method} path draws no zone map or stability chart; "
                 "drop refine"]
     need = CLASS_OUTPUT[spec.method]
-    if need not in resolve_outputs(spec.method, spec.outputs):
+    if need not in resolve_outputs(spec.method, spec.outputs, spec.system):
         return [f"refine: refining the {spec.method} map needs the output {need!r} (its "
                 f"classes); add it to outputs"]
     a, b = PLANES[spec.method]

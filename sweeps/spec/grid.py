@@ -21,18 +21,25 @@ from .models import AXES, AXIS_PARAM, Range, Spec
 
 
 def system_defaults(system: str) -> dict:
-    return P.CONTACT_DEFAULTS if system == "contact" else P.PAPER_DEFAULTS
+    """The shared parameters' defaults of a system (engine.contract.MechanicalSystem)."""
+    from engine import registry
+
+    return registry.system(system).defaults or P.PAPER_DEFAULTS
 
 
 def base_params(spec: Spec) -> np.ndarray:
-    """The parameter vector of the spec's non-swept values (system defaults elsewhere)."""
+    """The parameter vector of the spec's non-swept values (system defaults elsewhere),
+    followed by the models' own parameters (engine.registry.pack)."""
+    from engine import registry
+
     values = {name: value for name, value in spec.params.model_dump().items()
-              if name != "slow_force" and value is not None}
+              if name in P.INDEX and value is not None}
     values["slow_a"] = spec.params.slow_force.amplitude
     values["slow_omega"] = spec.params.slow_force.omega
     values["t_end"] = spec.time.t_end
     values["t_transient"] = spec.time.t_transient
-    return P.pack(system_defaults(spec.system), **values)
+    return registry.pack(spec.friction, spec.system, spec.model_values,
+                         system_defaults(spec.system), **values)
 
 
 def default_axis(spec: Spec, axis: str) -> list[float]:

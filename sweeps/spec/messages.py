@@ -66,6 +66,10 @@ def format_error(err: dict) -> str:
     if kind == "literal_error":
         return f"{loc}: got {show(value)}; {msg.lower()}"
     if kind == "value_error":
+        if loc and msg.startswith(f"{loc}"):   # a model's own line names its field already
+            return msg
+        if not loc and msg.startswith("params"):
+            return msg
         return f"{loc or 'spec'}: {msg}"
     parts = loc.split(".")
     if parts[0] == "grid" and (len(parts) == 2 or len(parts) == 3 and parts[2].isdigit()) \

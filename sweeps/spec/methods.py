@@ -10,19 +10,21 @@ PLANES = {"simulate": ("W", "omega"), "averaged": ("W", "v_ref")}
 CLASS_OUTPUT = {"simulate": "long_stick_fraction", "averaged": "stable"}
 
 
-def allowed_outputs(method: str) -> tuple[str, ...]:
-    """All outputs of path ``method`` ('simulate' | 'averaged' | 'hbm')."""
-    return tuple(engine_outputs.BY_PATH[method])
+def allowed_outputs(method: str, system: str = "slider") -> tuple[str, ...]:
+    """All outputs of path ``method`` ('simulate' | 'averaged' | 'hbm') on ``system`` (the
+    simulate path adds the system's own, engine.outputs.path_outputs)."""
+    return tuple(engine_outputs.path_outputs(method, system))
 
 
-def resolve_outputs(method: str, requested: list[str] | None) -> tuple[str, ...]:
+def resolve_outputs(method: str, requested: list[str] | None,
+                    system: str = "slider") -> tuple[str, ...]:
     """The requested outputs, or every output of the path when none were named."""
-    return tuple(requested) if requested else allowed_outputs(method)
+    return tuple(requested) if requested else allowed_outputs(method, system)
 
 
-def output_attrs(method: str, name: str) -> tuple:
+def output_attrs(method: str, name: str, system: str = "slider") -> tuple:
     """(long_name, units) of an output, plus ``(dim, size)`` for a vector output
     (``alpha_hist`` over ``alpha_bin``), as ``store.empty_cube`` takes them."""
-    meta = engine_outputs.describe(method, name)
+    meta = engine_outputs.describe(method, name, system)
     extra = engine_outputs.VECTOR.get(name) if method == "simulate" else None
     return (*meta, extra) if extra else meta

@@ -29,12 +29,13 @@ from pydantic import (
 
 from .messages import show
 from engine.params import POINT_AXES
+from engine.registry import LAW_NAMES, SYSTEM_NAMES
 from store.cube import AXES as CUBE_AXES
 
 from ..version import __version__
 
-SYSTEMS = ("slider", "contact")
-FRICTIONS = ("coulomb", "stribeck", "lugre", "elastoplastic")
+SYSTEMS = SYSTEM_NAMES       # built in; a spec may also name a model by import path
+FRICTIONS = LAW_NAMES
 DITHERS = ("none", "square-velocity", "sine-velocity", "sine-force")
 METHODS = ("simulate", "averaged", "hbm")
 LEVELS = ("draft", "standard", "reference")
@@ -100,7 +101,13 @@ class SlowForce(_Strict):
 
 class Params(_Strict):
     """Physical parameters not swept; ``None`` means the system default (paper Sec. 5.1
-    set for the slider, Fig. 1 SI set for the contact system)."""
+    set for the slider, Fig. 1 SI set for the contact system).
+
+    A friction law's or system's own parameters (engine.contract: Dahl's ``dahl_alpha``,
+    the GMS table ``gms = { k = [...], alpha = [...], C = ... }``, ``servo = { ... }``) are
+    further keys, checked against the models the spec names (:meth:`Spec._models`)."""
+
+    model_config = ConfigDict(extra="allow", frozen=True, strict=True, allow_inf_nan=False)
 
     sigma0: PositiveFloat | None = None
     sigma1: NonNegativeFloat | None = None
@@ -208,8 +215,9 @@ class Refine(_Strict):
 class Spec(_Strict):
     name: Annotated[str, Field(max_length=200)] = "sweep"
     description: Annotated[str, Field(max_length=10_000)] = ""
-    system: Literal["slider", "contact"] = "slider"
-    friction: Literal["coulomb", "stribeck", "lugre", "elastoplastic"] = "lugre"
+    # a built-in name (engine.registry) or an import path 'module:Name' / 'file.py:Name'
+    system: Annotated[str, Field(min_length=1, max_length=500)] = "slider"
+    friction: Annotated[str, Field(min_length=1, max_length=500)] = "lugre"
     dither: Literal["none", "square-velocity", "sine-velocity", "sine-force"] = "square-velocity"
     method: Literal["simulate", "averaged", "hbm"] = "simulate"
     outputs: Annotated[list[str], Field(max_length=100)] | None = None
@@ -220,6 +228,48 @@ class Spec(_Strict):
     grid: Grid = Grid()
     block_size: Annotated[int, Field(ge=1, le=MAX_AXIS_POINTS)] | None = None
     refine: bool | Refine = False
+
+    @field_validator("system", "friction")
+    @classmethod
+    def _known_model(cls, v, info: ValidationInfo):
+        from engine import registry
+
+        registry.resolve(info.field_name, v)    # ModelError (a ValueError): one line
+        return v
+
+    @model_validator(mode="after")
+    def _models(self):
+        from engine import registry
+
+        registry.check_values(self.friction, self.system, self.model_values)
+        return self
+
+    @property
+    def model_values(self) -> dict:
+        """The models' own parameters from ``[params]``: flat keys, and the keys of the table
+        named after a model's ``group`` (``gms = {...}``)."""
+        from engine import registry
+
+        extra = dict(self.params.model_extra or {})
+        values = {}
+        for owner in (registry.law(self.friction), registry.system(self.system)):
+            group = getattr(owner, "group", None)
+            if group and group in extra:
+                table = extra.pop(group)
+                if not isinstance(table, dict):
+                    raise ValueError(f"params.{group}: expected a table of {owner.name}'s "
+                                     f"parameters ({', '.join(registry.own_params(owner))}), "
+                                     f"got {show(table)}")
+                values.update({f"{k}": v for k, v in table.items()})
+        values.update(extra)
+        return values
+
+    @property
+    def model_sizes(self) -> tuple:
+        """``engine.Scene.sizes``: the lengths of the models' vector parameters."""
+        from engine import registry
+
+        return registry.sizes_of(self.friction, self.system, self.model_values)
 
     @field_validator("name")
     @classmethod
