@@ -52,7 +52,7 @@ def software_versions() -> dict[str, str]:
 def empty_cube(plan: Plan):
     """A cube with every point NOT_COMPUTED, the coordinates, variables and attributes of
     ``plan``."""
-    variables = {name: output_attrs(plan.path, name) for name in plan.outputs}
+    variables = {name: output_attrs(plan.path, name, plan.scene.system) for name in plan.outputs}
     units = {"omega": "rad/s", "W": "m/s", "v_ref": "m/s", "v_d": "m/s"} \
         if plan.spec.system == "contact" else None
     names = {"omega": "dither angular frequency: inf, the averaged theory is the limit "
