@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from .errors import InferredPointsWarning
-from .lookup import catalogue, check_cube_of, inferred_note, resolve_sweep, stale_note, store_root
+from .lookup import inferred_note, read_notes, read_sweep, store_root
 from .spec.load import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
@@ -73,7 +73,8 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
     ``chunks=None`` (default) loads it into memory and closes the file; ``chunks={}`` or a
     dict of sizes per axis opens it lazily as dask arrays (close it with ``ds.close()`` or
     a ``with`` block). A ``UserWarning`` when it was made by another engine than the
-    installed one; a :class:`sweeps.InferredPointsWarning` when it is refined
+    installed one, and one per accuracy warning the cube records (as ``ditherlab query``
+    says them); a :class:`sweeps.InferredPointsWarning` when it is refined
     (``refine = true``) with inferred points, whose outputs are a computed neighbour's
     (``ds.where(ds.provenance == 0)`` keeps the computed ones). Raises
     ``sweeps.errors.UserError`` when no sweep matches or the cube is another sweep's, and its
@@ -84,21 +85,12 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
 
     import xarray as xr
 
-    import store as _store
+    def lazy(cube):
+        return xr.open_dataset(cube, engine="h5netcdf", chunks=chunks, decode_timedelta=False)
 
     root = store_root(store)
-    sweep_id, cube = resolve_sweep(root, key)
-    if chunks is None:
-        ds = _store.open_cube(cube)
-    else:
-        ds = xr.open_dataset(cube, engine="h5netcdf", chunks=chunks, decode_timedelta=False)
-    try:
-        check_cube_of(ds, sweep_id, cube)
-    except Exception:
-        ds.close()
-        raise
-    note = stale_note(catalogue(root).get(sweep_id), ds, root)
-    if note:
+    sweep_id, _, ds = read_sweep(root, key, None if chunks is None else lazy)
+    for note in read_notes(root, sweep_id, ds):
         warnings.warn(note, stacklevel=2)
     note = inferred_note(ds["provenance"].values) if "provenance" in ds else None
     if note:

@@ -1,17 +1,66 @@
 """What the read commands hand out, written once for the command line and the web view:
-``query``'s table, CSV and JSON text (:func:`query_text`) and ``map``'s figures
-(:func:`draw_map`). ``ditherlab query`` prints :func:`query_text`'s string and the web view
-serves its bytes, so a download equals the command's output byte for byte."""
+the selection they read (:func:`parse_selection`), ``query``'s table, CSV and JSON text
+(:func:`query_text`) and ``map``'s figures (:func:`draw_map`, the kinds in :data:`MAPS`).
+``ditherlab query`` prints :func:`query_text`'s string and the web view serves its bytes,
+so a download equals the command's output byte for byte."""
 from __future__ import annotations
 
 import json
 import math
+from typing import NamedTuple
 
 from .errors import RefusedError
 
-FORMATS = ("table", "csv", "json")
-MAP_KINDS = ("stick-slip", "stability", "friction")
-MAP_AXES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W")}   # a map's own plane
+QUERY_FORMATS = ("table", "csv", "json")
+
+
+class MapKind(NamedTuple):
+    """What a map kind is drawn over and from: the axes it is drawn over (each needs more
+    than one value; a selection of one is refused), the axis drawn as curves (a friction
+    map's W), the outputs it reads (any one of them), the store function that draws it."""
+    over: tuple[str, ...]
+    curves: str | None
+    outputs: tuple[str, ...]
+    draw: str
+
+
+# the one table of map kinds: the CLI's --kind, the web's routes and planes are built on it
+MAPS = {
+    "stick-slip": MapKind(("W", "omega"), None, ("long_stick_fraction",), "stick_slip_map"),
+    "stability": MapKind(("v_ref", "W"), None, ("stable", "max_real_eig"), "stability_map"),
+    "friction": MapKind(("v_ref",), "W", ("F_eff", "F_mean"), "friction_curves"),
+}
+
+
+def plane(kind: str) -> tuple[str, ...]:
+    """The axes a ``kind`` map shows (drawn over, and as curves)."""
+    m = MAPS[kind]
+    return (m.curves, *m.over) if m.curves else m.over
+
+
+def parse_selection(pairs, option: str = "--sel {axis}") -> dict[str, float]:
+    """``(axis, text)`` pairs -> ``{axis: value}``, the one set of rules of the command
+    line's ``--sel AXIS=VALUE`` and the web view's ``sel.AXIS=VALUE``: a cube axis, a number
+    (not NaN), one value per axis (the same value twice is one). ``option`` names a pair in
+    the refusal (``--sel {axis}``, ``sel.{axis}``)."""
+    from store.cube import AXES
+
+    sel: dict[str, float] = {}
+    for axis, text in pairs:
+        name = option.format(axis=str(axis)[:40])
+        if axis not in AXES:
+            raise RefusedError(f"{name}: unknown axis; the axes are {', '.join(AXES)}")
+        try:
+            x = float(text)
+        except ValueError:
+            raise RefusedError(f"{name}: expected a number, got {str(text)[:40]!r}") from None
+        if math.isnan(x):
+            raise RefusedError(f"{name}: expected a number, got NaN")
+        if axis in sel and sel[axis] != x:
+            raise RefusedError(f"{name}: given twice ({sel[axis]:g} and {str(text).strip()}); "
+                               "a selection takes one value per axis")
+        sel[axis] = x
+    return sel
 
 
 def _json_value(x):
@@ -54,11 +103,11 @@ def refuse_map_axes(kind: str, sel: dict, ds) -> None:
     """A selection of an axis the map is drawn over (with more than one value in ``ds``)
     is refused, not drawn as a one-column map (a stability cut labelled alone would also
     lose its PU link to W = 0)."""
-    plane = MAP_AXES.get(kind, ())
-    fixed = [axis for axis in sel if axis in plane and ds.sizes[axis] > 1]
+    over = MAPS[kind].over
+    fixed = [axis for axis in sel if axis in over and ds.sizes[axis] > 1]
     if fixed:
         raise RefusedError(f"--sel {fixed[0]}: {fixed[0]} is an axis of the {kind} map "
-                           f"({' x '.join(plane)}), not a value to fix; `ditherlab query` "
+                           f"({' x '.join(over)}), not a value to fix; `ditherlab query` "
                            f"reads a cut through it")
 
 
@@ -69,8 +118,7 @@ def draw_map(ds, kind: str, sel: dict, path) -> None:
     import store
 
     refuse_map_axes(kind, sel, ds)
-    draw = {"stick-slip": store.stick_slip_map, "stability": store.stability_map,
-            "friction": store.friction_curves}[kind]
+    draw = getattr(store, MAPS[kind].draw)
     try:
         draw(ds, path, sel=sel)
     except ValueError as exc:

@@ -108,6 +108,40 @@ def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:
             f"{results_fingerprint()}; `ditherlab submit SPEC`{spec} recomputes it")
 
 
+def read_sweep(root: Path, key: str, opener=None) -> tuple[str, Path, object]:
+    """The one read path of a sweep's cube, for the command line, the Python API and the
+    web view: find the sweep (:func:`resolve_sweep`), then :func:`open_checked`. Returns
+    ``(sweep id, cube path, what opener returned)``; say :func:`read_notes` as you warn."""
+    sweep_id, cube = resolve_sweep(root, key)
+    return sweep_id, cube, open_checked(sweep_id, cube, opener)
+
+
+def open_checked(sweep_id: str, cube: Path, opener=None):
+    """``opener(cube)`` (default ``store.open_cube``; a lazy open, the header alone, the
+    web's snapshot: its ``ds`` is checked), refused (and closed) when the cube is another
+    sweep's (:func:`check_cube_of`)."""
+    import store
+
+    opened = (opener or store.open_cube)(cube)
+    ds = getattr(opened, "ds", opened)
+    try:
+        check_cube_of(ds, sweep_id, cube)
+    except BaseException:
+        if opened is ds and hasattr(ds, "close"):   # a file this call opened
+            ds.close()
+        raise
+    return opened
+
+
+def read_notes(root: Path, sweep_id: str, ds) -> list[str]:
+    """What a reader of a sweep's cube is warned of, one line each: a stale engine
+    (:func:`stale_note`), then every accuracy warning the cube records."""
+    from store.attrs import accuracy_warnings
+
+    note = stale_note(catalogue(root).get(sweep_id), ds, root)
+    return ([note] if note else []) + accuracy_warnings(ds.attrs)
+
+
 def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
     """Refuse to serve a cube that another sweep wrote (a file copied or moved between
     sweep folders): its numbers would be served as this sweep's, with status ok."""

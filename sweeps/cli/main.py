@@ -25,6 +25,8 @@ import sys
 from contextlib import contextmanager
 
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
+from ..exports import MAPS, QUERY_FORMATS
+from ..workers.batch import KINDS as BATCH_KINDS
 from .scenes import add_commands as add_scene_commands
 from ..web.cli import add_commands as add_web_commands
 from .reading import cmd_map, cmd_query, cmd_status
@@ -85,12 +87,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("sweep")
     p.add_argument("--var", help="variable (default: all outputs)")
     p.add_argument("--sel", action="append", metavar="AXIS=VALUE", help="nearest-point selection")
-    p.add_argument("--format", choices=("table", "csv", "json"), default="table")
+    p.add_argument("--format", choices=QUERY_FORMATS, default="table")
     p.set_defaults(func=cmd_query)
 
     p = sub.add_parser("map", parents=[common], help="draw a map from a cube (png, pdf, svg)")
     p.add_argument("sweep", nargs="?", help="sweep id, id prefix or name; or --scene NAME")
-    p.add_argument("--kind", required=True, choices=("stick-slip", "stability", "friction"))
+    p.add_argument("--kind", required=True, choices=tuple(MAPS))
     p.add_argument("--sel", action="append", metavar="AXIS=VALUE")
     p.add_argument("-o", "--output", required=True,
                    help="file to write: .png, .pdf or .svg, in an existing folder")
@@ -101,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("spec", nargs="?", help="spec file (.toml or .json); or --scene NAME")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=2)
-    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+    where.add_argument("--cluster", choices=tuple(BATCH_KINDS),
                        help="estimate for batch jobs (their start-up counted)")
     p.add_argument("--jobs", type=int, default=4, metavar="N", help="with --cluster")
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS)
@@ -118,7 +120,7 @@ def _cluster_options(p) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument("--scheduler", help="address of an existing dask scheduler, tcp://HOST:PORT")
     where.add_argument("--workers", type=int, default=2, help="local worker processes (default 2)")
-    where.add_argument("--cluster", choices=("slurm", "pbs", "sge"),
+    where.add_argument("--cluster", choices=tuple(BATCH_KINDS),
                        help="workers as batch jobs through dask-jobqueue, configured the dask "
                        "way (jobqueue.KIND.* : docs/BATCH.md)")
     p.add_argument("--jobs", type=int, default=4, metavar="N",

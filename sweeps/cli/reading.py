@@ -10,40 +10,31 @@ import sys
 from pathlib import Path
 
 from ..errors import RefusedError
-from ..exports import draw_map, query_text
-from ..lookup import (STALE, catalogue, check_cube_of, inferred_note, is_stale, resolve_sweep,
-                      stale_note, store_root)
+from ..exports import draw_map, parse_selection, query_text
+from ..lookup import (STALE, catalogue, inferred_note, is_stale, open_checked, read_notes,
+                      read_sweep, resolve_sweep, stale_note, store_root)
 
 
 def parse_sel(items: list[str] | None) -> dict[str, float]:
-    """``--sel AXIS=VALUE ...`` as a dict; an axis given twice is refused (one value each;
-    ``map --kind friction`` takes several W curves before this, sweeps.cli.scenes)."""
-    sel = {}
+    """``--sel AXIS=VALUE ...`` as a dict, by the rules of sweeps.exports.parse_selection
+    (``map --kind friction`` takes several W curves before this, sweeps.cli.scenes)."""
+    pairs = []
     for item in items or ():
         axis, eq, value = item.partition("=")
-        axis = axis.strip()
         if not eq:
             raise RefusedError(f"--sel: expected AXIS=VALUE (e.g. v_d=0.1), got {item!r}")
-        x = _number(axis, value)
-        if axis in sel and sel[axis] != x:
-            raise RefusedError(f"--sel {axis}: given twice ({sel[axis]:g} and {value.strip()}); "
-                               f"a selection takes one value per axis")
-        sel[axis] = x
-    return sel
+        pairs.append((axis.strip(), value))
+    return parse_selection(pairs)
 
 
-def _number(axis: str, value: str) -> float:
-    try:
-        return float(value)
-    except ValueError:
-        raise RefusedError(f"--sel {axis}: value must be a number, got {value!r}") from None
-
-
-def _warn_stale(root: Path, sweep_id: str, ds) -> None:
-    """One stderr line when the sweep being served is stale (query, map)."""
-    note = stale_note(catalogue(root).get(sweep_id), ds, root)
-    if note:
+def _read(args):
+    """The cube of ``args.sweep``, found, opened and checked, its warnings said (query,
+    map): sweeps.lookup.read_sweep, the read path of the API and the web view too."""
+    root = store_root(args.store)
+    sweep_id, _, ds = read_sweep(root, args.sweep)
+    for note in read_notes(root, sweep_id, ds):
         print(f"ditherlab: warning: {note}", file=sys.stderr)
+    return ds
 
 
 def cmd_status(args) -> int:
@@ -59,7 +50,7 @@ def cmd_status(args) -> int:
         sweep_id, cube = resolve_sweep(root, args.sweep, need_cube=False)
         row = cat.get(sweep_id)
         row["path"] = str(cube.parent)   # where it is now (a store may have been moved)
-        ds = _header(cube) if cube.exists() else None
+        ds = open_checked(sweep_id, cube, _header) if cube.exists() else None
         live, note = cat.live_state(row), stale_note(row, ds, root)
         row["state"] = f"{live} ({STALE})" if note else live
         for key, value in _shown(row, live).items():
@@ -71,8 +62,7 @@ def cmd_status(args) -> int:
                   "again to resume (finished blocks are kept)")
         elif live == "queued":
             print(f"{'':>16}{queue_hint(cat, [row])}")
-        if ds is not None:
-            check_cube_of(ds, sweep_id, cube)   # not another sweep's estimate and warnings
+        if ds is not None:   # checked: not another sweep's estimate and warnings
             _print_error_estimate(ds)
             _warn_accuracy(ds)
         return 0
@@ -101,9 +91,7 @@ def _status_json(root: Path, key: str | None) -> int:
 
     if key:
         sweep_id, cube = resolve_sweep(root, key, need_cube=False)
-        ds = _header(cube) if cube.exists() else None
-        if ds is not None:
-            check_cube_of(ds, sweep_id, cube)
+        ds = open_checked(sweep_id, cube, _header) if cube.exists() else None
         data = sweep_detail(root, sweep_id, ds)
     else:
         data = store_summary(root)
@@ -208,15 +196,8 @@ def warn_inferred(ds, sel) -> None:
 
 
 def cmd_query(args) -> int:
-    import store
-
     sel = parse_sel(args.sel)   # a malformed selection is refused before the store is read
-    root = store_root(args.store)
-    sweep_id, cube = resolve_sweep(root, args.sweep)
-    ds = store.open_cube(cube)
-    check_cube_of(ds, sweep_id, cube)
-    _warn_stale(root, sweep_id, ds)
-    _warn_accuracy(ds)
+    ds = _read(args)
     text = query_text(ds, args.var, sel, args.format)
     warn_inferred(ds, args.sel)
     sys.stdout.write(text)
@@ -232,13 +213,7 @@ def open_for_map(args):
         store.figure_format(args.output)
     except ValueError as exc:
         raise RefusedError(str(exc)) from None
-    root = store_root(args.store)
-    sweep_id, cube = resolve_sweep(root, args.sweep)
-    ds = store.open_cube(cube)
-    check_cube_of(ds, sweep_id, cube)
-    _warn_stale(root, sweep_id, ds)
-    _warn_accuracy(ds)
-    return ds
+    return _read(args)
 
 
 def cmd_map(args) -> int:

@@ -12,15 +12,20 @@ from pathlib import Path
 
 import tornado.web
 
+from ..exports import MAPS, QUERY_FORMATS
 from . import downloads, extra_pages, pages
 from .base import NotFound
 from .explorer import Explorer
 from .live import LiveCatalogue
 from .lru import LRU
-from .renders import MapCache
+from .renders import MEDIA, MapCache
 from .snapshot import Cubes
 
 ID = r"([0-9a-f]{12})"
+MAP_KIND = f"({'|'.join(MAPS)})"
+EXPLORER_KIND = "(stability|friction)"   # the explorer's averaged cube draws these two
+IMAGE = f"({'|'.join(MEDIA)})"
+QUERY = f"({'|'.join(f for f in QUERY_FORMATS if f != 'table')})"   # downloads: no table
 PLANS = 256   # plan summaries kept (each a few hundred bytes)
 log = logging.getLogger("ditherlab")
 
@@ -76,11 +81,10 @@ def make_app(ctx: Context) -> tornado.web.Application:
         (rf"/api/sweep/{ID}", pages.ApiSweep, c),
         (rf"/sweep/{ID}", pages.SweepPage, c),
         (rf"/sweep/{ID}/cube\.nc", downloads.CubeFile, c),
-        (rf"/sweep/{ID}/query\.(csv|json)", downloads.Query, c),
-        (rf"/sweep/{ID}/map/(stick-slip|stability|friction)\.(png|svg|pdf)",
-         downloads.MapImage, c),
-        (r"/explorer", extra_pages.Explorer, c),
-        (r"/explorer/(stability|friction)\.png", extra_pages.ExplorerImage, c),
+        (rf"/sweep/{ID}/query\.{QUERY}", downloads.Query, c),
+        (rf"/sweep/{ID}/map/{MAP_KIND}\.{IMAGE}", downloads.MapImage, c),
+        (r"/explorer", extra_pages.ExplorerPage, c),
+        (rf"/explorer/{EXPLORER_KIND}\.png", extra_pages.ExplorerImage, c),
         (r"/explorer/spec\.toml", extra_pages.ExplorerToml, c),
         (r"/gallery", tornado.web.RedirectHandler, {"url": "/gallery/"}),
         (r"/gallery/", extra_pages.Gallery, c),

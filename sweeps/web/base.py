@@ -6,7 +6,6 @@ string (``sel.AXIS=VALUE``)."""
 from __future__ import annotations
 
 import json
-import math
 from pathlib import Path
 
 import jinja2
@@ -21,7 +20,6 @@ from .security import COOKIE, CSP, HEADERS, bearer, token_matches
 HERE = Path(__file__).parent
 TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE / "templates"),
                                autoescape=True, undefined=jinja2.StrictUndefined)
-AXES = ("W", "omega", "v_ref", "v_d")
 
 
 class Base(tornado.web.RequestHandler):
@@ -94,28 +92,14 @@ class Base(tornado.web.RequestHandler):
         return row
 
     def selection(self) -> dict[str, float]:
-        """``sel.AXIS=VALUE`` query arguments as a selection (numbers, one per axis)."""
-        sel = {}
-        for axis in AXES:
-            values = [x for x in self.get_query_arguments(f"sel.{axis}") if x.strip()]
-            if not values:
-                continue
-            if len(set(values)) > 1:
-                raise HTTPError(400, f"sel.{axis}: given twice; a selection takes one value "
-                                "per axis")
-            try:
-                x = float(values[0])
-            except ValueError:
-                raise HTTPError(400, f"sel.{axis}: expected a number, got {values[0][:40]!r}")
-            if math.isnan(x):
-                raise HTTPError(400, f"sel.{axis}: expected a number, got NaN")
-            sel[axis] = x
-        unknown = [k for k in self.request.query_arguments
-                   if k.startswith("sel.") and k[4:] not in AXES]
-        if unknown:
-            raise HTTPError(400, f"{unknown[0][:40]}: unknown axis; the axes are "
-                            f"{', '.join(AXES)}")
-        return sel
+        """``sel.AXIS=VALUE`` query arguments as a selection, by the command line's rules
+        (sweeps.exports.parse_selection); a field left empty in a form is not given."""
+        from ..exports import parse_selection
+
+        pairs = [(k[4:], v.decode(errors="replace")) for k, values in
+                 self.request.query_arguments.items() if k.startswith("sel.")
+                 for v in values if v.strip()]
+        return parse_selection(pairs, "sel.{axis}")
 
 
 class NotFound(Base):

@@ -16,17 +16,14 @@ MAX_CELLS = 2_000_000
 
 
 def _snapshot(ctx, sweep_id: str):
-    from ..lookup import check_cube_of
+    """The sweep's cube as published now, read and checked (sweeps.lookup.open_checked,
+    the read path of the command line and the API)."""
+    from ..lookup import open_checked
 
-    path = ctx.cube_path(sweep_id)
-    if not path.exists():
-        raise HTTPError(404, f"sweep {sweep_id} has no cube yet")
     try:
-        snap = ctx.cubes.get(path)
+        return open_checked(sweep_id, ctx.cube_path(sweep_id), ctx.cubes.get)
     except FileNotFoundError:
         raise HTTPError(404, f"sweep {sweep_id} has no cube yet") from None
-    check_cube_of(snap.ds, sweep_id, path)
-    return snap
 
 
 class CubeFile(Base):

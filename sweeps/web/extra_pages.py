@@ -50,7 +50,7 @@ def _fields(handler) -> dict:
     return {k: v for k, v in given.items() if v != ""}
 
 
-class Explorer(Base):
+class ExplorerPage(Base):
     def get(self):
         fields = _fields(self)
         values = {**DEFAULTS, **fields}

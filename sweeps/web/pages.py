@@ -7,7 +7,9 @@ import json
 from tornado.ioloop import IOLoop
 from tornado.web import HTTPError
 
-from .base import AXES, Base
+from store.cube import AXES
+
+from .base import Base
 from .sweep_view import sweep_view
 
 SORTS = ("created", "name", "state", "done", "path", "finished", "sweep_id")

@@ -9,26 +9,20 @@ from urllib.parse import urlencode
 
 import numpy as np
 
-from .base import AXES
-from .tomltext import spec_toml
+from store.cube import AXES
 
-PLANES = {"stick-slip": ("W", "omega"), "stability": ("v_ref", "W"), "friction": ("W", "v_ref")}
+from ..exports import MAPS, plane
+from .tomltext import spec_toml
 
 
 def fitting_maps(ds) -> list[str]:
-    """The map kinds this cube can draw (their outputs present, their plane more than a
-    point)."""
+    """The map kinds this cube can draw (one of their outputs present, each axis they are
+    drawn over with more than one value)."""
     from store.query import output_names
 
     names = set(output_names(ds))
-    found = []
-    if "long_stick_fraction" in names and ds.sizes["W"] > 1 and ds.sizes["omega"] > 1:
-        found.append("stick-slip")
-    if names & {"stable", "max_real_eig"} and ds.sizes["W"] > 1 and ds.sizes["v_ref"] > 1:
-        found.append("stability")
-    if names & {"F_eff", "F_mean"} and ds.sizes["v_ref"] > 1:
-        found.append("friction")
-    return found
+    return [kind for kind, m in MAPS.items()
+            if names & set(m.outputs) and all(ds.sizes[a] > 1 for a in m.over)]
 
 
 def map_controls(ds, kind: str, sel: dict) -> dict:
@@ -36,7 +30,7 @@ def map_controls(ds, kind: str, sel: dict) -> dict:
     values and the one chosen (the selection's nearest, else the first)."""
     controls = {}
     for axis in AXES:
-        if axis in PLANES[kind] or ds.sizes[axis] < 2:
+        if axis in plane(kind) or ds.sizes[axis] < 2:
             continue
         values = [float(x) for x in ds[axis].values]
         want = sel.get(axis, values[0])
@@ -111,14 +105,13 @@ def _provenance(ds) -> list[tuple[str, str]]:
 
 def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     """Everything the sweep page of ``sweep_id`` (looked up in the catalogue) shows."""
-    from ..lookup import check_cube_of
+    from ..lookup import open_checked
     from ..overview import sweep_detail
 
     cube_path = ctx.cube_path(sweep_id)
     ds = None
     if cube_path.exists():
-        ds = ctx.cubes.get(cube_path).ds
-        check_cube_of(ds, sweep_id, cube_path)
+        ds = open_checked(sweep_id, cube_path, ctx.cubes.get).ds
     detail = sweep_detail(ctx.root, sweep_id, ds)
     from ..estimates.time_history import recorded
 
@@ -135,7 +128,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
         controls = map_controls(ds, kind, sel)
         query = {f"sel.{a}": repr(c["chosen"]) for a, c in controls.items()}
         view["maps"].append({"kind": kind, "controls": controls,
-                             "query": urlencode(query), "plane": PLANES[kind]})
+                             "query": urlencode(query), "plane": plane(kind)})
     view["query_sel"] = urlencode({f"sel.{a}": repr(x) for a, x in sel.items()})
     return view
 
