@@ -48,6 +48,11 @@ def test_scenes_lists_every_figure_the_gallery_draws_with_its_recipe(capsys):
     (("map", "fig14", "--kind", "stick-slip", "--pick", "3", "-o", "x.png"),
      "--pick applies to --kind friction only"),
     (("query", "fig14", "--sel", "W=0.1", "--sel", "W=0.2"), "--sel W: given twice"),
+    # the web's rules (sweeps.exports.parse_selection), refused before the store is read
+    (("query", "fig14", "--sel", "v_d=nan"), "--sel v_d: expected a number, got NaN"),
+    (("query", "fig14", "--sel", "vd=0.1"), "--sel vd: unknown axis; the axes are W, omega"),
+    (("map", "fig14", "--kind", "stability", "--sel", "W=fast", "-o", "x.png"),
+     "--sel W: expected a number, got 'fast'"),
     (("map", "fig14", "--kind", "friction", "--pick", "3", "--sel", "W=0.1", "-o", "x.png"),
      "give --pick N or --sel W=VALUE, not both"),
     (("map", "fig14", "--kind", "friction", "--pick", "0", "-o", "x.png"), "--pick: must be >= 1"),
