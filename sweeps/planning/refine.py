@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..spec.models import AXES
+from ..spec.grid import AXES
 from ..spec.methods import CLASS_OUTPUT, PLANES  # noqa: F401  (CLASS_OUTPUT: re-exported)
 from .lattice import lattice, split
 
@@ -53,8 +53,6 @@ FIRST_STEPS = {"simulate": 4, "averaged": 8}
 MAX_FIRST_STRIDE = {"simulate": None, "averaged": 16}
 # paths whose split cells infer the new points on agreeing edges (module docstring)
 EDGE_INFERENCE = {"simulate": True, "averaged": False}
-COMPUTED, INFERRED, NOT_NEEDED = 0, 1, 2
-FLAG_MEANINGS = ("computed", "inferred")
 
 
 def default_stride(n: int, target: int = 4) -> int:

@@ -9,7 +9,7 @@ import store
 from engine import params as P
 
 from ..spec.methods import output_attrs
-from ..spec.models import AXIS_PARAM
+from ..spec.grid import AXIS_PARAM
 from ..planning.plan import Plan
 from ..version import __version__, results_fingerprint
 

@@ -18,13 +18,14 @@ from contextlib import nullcontext
 import numpy as np
 
 import store
+from store.flags import COMPUTED, INFERRED
 from engine import status as S
 
 from ..workers.cluster import dask_client
 from . import phases
 from .dispatch import run_blocks, run_blocks_local
 from ..planning.plan import Plan, balanced_blocks
-from ..planning.refine import CLASS_OUTPUT, COMPUTED, INFERRED, MARGIN_OUTPUT, Refinement
+from ..planning.refine import CLASS_OUTPUT, MARGIN_OUTPUT, Refinement
 from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
 
 BLOCK_POINTS = {"simulate": 8, "averaged": 4096}   # points per block of a level (at most)

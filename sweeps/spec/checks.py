@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .grid import system_defaults
+from .grid import AXES, system_defaults
 from .methods import CLASS_OUTPUT, PLANES, allowed_outputs, resolve_outputs
 from .messages import show
-from .models import AXES, Range, Spec
+from .models import Range, Spec
 
 
 def check_choices(spec: Spec) -> list[str]:

@@ -12,12 +12,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from engine import params as P
+from store.cube import AXES as CUBE_AXES
 
-from .models import AXES, AXIS_PARAM, Range, Spec
+if TYPE_CHECKING:   # the models reach their grid's facts here (Spec.grid_facts), not back
+    from .models import Spec
+
+# The four axes of every cube in its dimension order, and the engine parameter each one
+# sets: the one table of their two spellings (the cube and the spec say v_d, the parameter
+# vector vd), joined from the cube's axes (store.cube.AXES) and the columns of the engine's
+# points (engine.params.POINT_AXES). The spec's Grid has a field for each.
+AXIS_PARAM = dict(zip(CUBE_AXES, P.POINT_AXES))
+AXES = tuple(AXIS_PARAM)
 
 
 def system_defaults(system: str) -> dict:
@@ -58,9 +68,9 @@ def axis_size(spec: Spec, axis: str) -> int:
     raw = getattr(spec.grid, axis)
     if raw is None:
         return 1
-    if isinstance(raw, Range):
-        return raw.num
-    return len(raw)
+    if isinstance(raw, (list, tuple)):   # a list of values, else a Range
+        return len(raw)
+    return raw.num
 
 
 def axis_values(spec: Spec, axis: str) -> np.ndarray:
@@ -68,11 +78,11 @@ def axis_values(spec: Spec, axis: str) -> np.ndarray:
     raw = getattr(spec.grid, axis)
     if raw is None:
         return np.asarray(default_axis(spec, axis), dtype=float)
-    if isinstance(raw, Range):
-        if raw.scale == "log":
-            return np.geomspace(raw.start, raw.stop, raw.num)
-        return np.linspace(raw.start, raw.stop, raw.num)
-    return np.asarray(raw, dtype=float)
+    if isinstance(raw, (list, tuple)):   # a list of values, else a Range
+        return np.asarray(raw, dtype=float)
+    if raw.scale == "log":
+        return np.geomspace(raw.start, raw.stop, raw.num)
+    return np.linspace(raw.start, raw.stop, raw.num)
 
 
 @dataclass(frozen=True)

@@ -38,10 +38,10 @@ from pydantic import ValidationError
 
 from . import feasibility
 from ..errors import MAX_LINE, MAX_PROBLEMS, SpecError  # noqa: F401  (re-exported)
-from .grid import axis_size
+from .grid import AXES, axis_size
 from .checks import check_choices, check_grid
 from .messages import format_error, format_loc, show
-from .models import AXES, MAX_AXIS_POINTS, Spec
+from .models import MAX_AXIS_POINTS, Spec
 
 DEFAULT_MAX_POINTS = 250_000
 MAX_DEPTH = 16                    # nesting of tables and lists (a spec needs 3)

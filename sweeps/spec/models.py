@@ -28,9 +28,7 @@ from pydantic import (
 )
 
 from .messages import show
-from engine.params import POINT_AXES
 from engine.registry import LAW_NAMES, SYSTEM_NAMES
-from store.cube import AXES as CUBE_AXES
 
 from ..version import __version__
 
@@ -39,12 +37,6 @@ FRICTIONS = LAW_NAMES
 DITHERS = ("none", "square-velocity", "sine-velocity", "sine-force")
 METHODS = ("simulate", "averaged", "hbm")
 LEVELS = ("draft", "standard", "reference")
-# The four axes of every cube in its dimension order, and the engine parameter each one
-# sets: the one table of their two spellings (the cube and the spec say v_d, the parameter
-# vector vd), joined from the cube's axes (store.cube.AXES) and the columns of the engine's
-# points (engine.params.POINT_AXES). Grid below has a field for each.
-AXIS_PARAM = dict(zip(CUBE_AXES, POINT_AXES))
-AXES = tuple(AXIS_PARAM)
 COSMETIC = ("name", "description", "block_size")
 
 MAX_AXIS_POINTS = 10_000_000      # num of one range, and values of one list axis
@@ -85,7 +77,7 @@ Axis = Annotated[Annotated[list[float], Field(min_length=1, max_length=MAX_AXIS_
 
 
 class Grid(_Strict):
-    """The four axes of every cube (:data:`AXES`); an omitted axis has the single system
+    """The four axes of every cube (``grid.AXES``); an omitted axis has the single system
     default."""
 
     W: Axis | None = None
