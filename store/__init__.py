@@ -42,10 +42,10 @@ cube / points / cube_io
     ``AXES``; ``empty_cube(coords, variables, attrs=None, axis_units=None,
     axis_long_names=None) -> Cube`` (``store.cubedata``: numpy arrays, dims, attributes;
     ``.to_dataset()`` for xarray); ``output_names(ds)``; ``fill(ds, record)``;
-    ``grid_points(ds, flat_index=None) -> (n, 4)``;
-    ``pending_index(ds)``; ``status_counts(ds)``; ``publish(ds, path) -> Path``;
+    ``status_counts(ds)``; ``publish(ds, path) -> Path``;
     ``open_cube(path) -> xarray.Dataset``; ``read_cube(path) -> Cube``; status codes
-    ``OK, NOT_COMPUTED, FAILED, NON_FINITE``.
+    ``OK, NOT_COMPUTED, FAILED, NON_FINITE`` and provenance codes ``COMPUTED, INFERRED,
+    UNDECIDED`` (store.flags).
 record / journal
     ``BlockRecord(index, status, cost_s, steps, evals, outputs)``: one block's results from
     the worker to the journal to the cube; ``Journal(folder)`` with ``.write(block_id,
@@ -60,7 +60,8 @@ query
 maps
     ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
 layout / atomic / errors / attrs
-    ``SweepDir(store_root, sweep_id)``, ``default_store()``; ``atomic_write``;
+    ``SweepDir(store_root, sweep_id)``, ``ENV_STORE``/``DEFAULT_STORE`` (the default
+    store, sweeps.lookup.store_root); ``atomic_write``;
     ``store.errors.StoreError`` and its kinds; ``canonical_json``, ``decode_attr``.
 """
 
@@ -72,8 +73,8 @@ __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
     submodules=["atomic", "attrs", "catalogue", "catalogue_db", "cube", "cube_io", "cubedata",
                 "errors",
-                "header", "journal", "layout", "lease", "maps", "points", "query", "record",
-                "status"],
+                "flags", "header", "journal", "layout", "lease", "maps", "points", "query",
+                "record"],
     submod_attrs={
         "attrs": ["canonical_json", "decode_attr"],
         "catalogue": ["STATES", "Catalogue"],
@@ -84,13 +85,14 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "journal": ["Journal", "rebuild"],
         "record": ["BlockRecord"],
         "atomic": ["atomic_write"],
-        "layout": ["SweepDir", "default_store"],
-        "points": ["fill", "grid_points", "pending_index", "status_counts"],
+        "layout": ["SweepDir"],
+        "points": ["fill", "status_counts"],
         "axes": ["FORMATS", "figure_format"],
         "maps": ["friction_curves", "stability_map",
                  "stick_slip_map"],
         "query": ["NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select",
                   "stability_chart", "table", "zone_map"],
-        "status": ["FAILED", "NON_FINITE", "NOT_COMPUTED", "OK", "STATUS_MEANINGS"],
+        "flags": ["COMPUTED", "FAILED", "INFERRED", "NON_FINITE", "NOT_COMPUTED", "OK",
+                  "PROVENANCE_MEANINGS", "STATUS_MEANINGS", "UNDECIDED"],
     },
 )

@@ -13,7 +13,7 @@ import numpy as np
 
 from . import attrs as A
 from .errors import NoSpaceError, StoreError
-from .status import FAILED, NON_FINITE, NOT_COMPUTED
+from .flags import FAILED, NON_FINITE, NOT_COMPUTED
 
 STATES = ("queued", "running", "done", "partial", "failed", "cancelled")
 FINAL = ("done", "partial", "failed", "cancelled")   # nobody works on the sweep

@@ -11,8 +11,7 @@ A cube is a :class:`store.cubedata.Cube` (the netCDF data model in numpy; reader
 - ``cost_s`` float64 seconds, ``steps`` and ``evals`` int64 per point.
 
 Points are addressed by a *flat index* in C order over ``AXES``
-(``np.ravel_multi_index((iW, iomega, iv_ref, iv_d), shape)``); ``grid_points`` turns
-flat indices into ``(n, 4)`` parameter rows in the column order of ``AXES``.
+(``np.ravel_multi_index((iW, iomega, iv_ref, iv_d), shape)``).
 
 On disk it is one HDF5/netCDF4 file written by ``publish`` (zlib, atomic rename) and
 readable with ``xarray.open_dataset(path, engine="h5netcdf")``.
@@ -32,7 +31,8 @@ import numpy as np
 
 from . import attrs as A
 from .cubedata import Cube, Variable
-from .status import FAILED, NON_FINITE, NOT_COMPUTED, OK, STATUS_MEANINGS  # noqa: F401
+from .flags import FAILED, NON_FINITE, NOT_COMPUTED, OK, STATUS_MEANINGS  # noqa: F401
+from .flags import COMPUTED, INFERRED, PROVENANCE_MEANINGS, UNDECIDED  # noqa: F401
 
 AXES = ("W", "omega", "v_ref", "v_d")
 AXIS_META = {  # axis -> (long_name, default units); the contact system overrides units
@@ -48,8 +48,7 @@ BOOKKEEPING = {  # name -> (dtype, initial value, long_name, units)
     "evals": (np.int64, 0, "right-hand-side evaluations", "1"),
 }
 # refined sweeps (sweeps.planning.refine): per point, computed or inferred from computed neighbours
-PROVENANCE = "provenance"
-PROVENANCE_MEANINGS = ("computed", "inferred", "not_yet_decided")
+PROVENANCE = "provenance"   # its codes: store.flags (COMPUTED, INFERRED, UNDECIDED)
 RESERVED = frozenset(AXES) | frozenset(BOOKKEEPING) | {"index", PROVENANCE}
 
 
@@ -192,9 +191,9 @@ def output_names(ds: Cube) -> list[str]:
 
 
 def add_provenance(ds: Cube) -> None:
-    """Give ``ds`` the ``provenance`` flag variable of a refined sweep (int8, CF flags: 0
-    computed, 1 inferred, 2 not yet decided), every point not yet decided."""
-    ds[PROVENANCE] = Variable(AXES, np.full(shape_of(ds), 2, dtype=np.int8), {
+    """Give ``ds`` the ``provenance`` flag variable of a refined sweep (int8, CF flags:
+    store.flags' ``COMPUTED``, ``INFERRED``, ``UNDECIDED``), every point not yet decided."""
+    ds[PROVENANCE] = Variable(AXES, np.full(shape_of(ds), UNDECIDED, dtype=np.int8), {
         "long_name": "computed, or inferred from computed neighbours (adaptive refinement)",
         "flag_values": np.arange(len(PROVENANCE_MEANINGS), dtype=np.int8),
         "flag_meanings": " ".join(PROVENANCE_MEANINGS)})

@@ -36,13 +36,8 @@ CUBE_NAME = "cube.nc"
 LEGACY_CUBE_NAME = "cube.h5"   # stores written before 0.2 (same format, old suffix)
 JOURNAL_DIR = "journal"
 SPEC_NAME = "spec.json"
-ENV_STORE = "DITHERLAB_STORE"
+ENV_STORE = "DITHERLAB_STORE"     # the default store: sweeps.lookup.store_root
 DEFAULT_STORE = "ditherlab-store"
-
-
-def default_store() -> Path:
-    """The store root: ``$DITHERLAB_STORE`` if set, else ``./ditherlab-store``."""
-    return Path(os.environ.get(ENV_STORE) or DEFAULT_STORE)
 
 
 class SweepDir:

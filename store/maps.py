@@ -29,6 +29,7 @@ from matplotlib.patches import Patch
 from . import attrs as A
 from .axes import axis_label, cell_edges, figure_format, is_log_spaced
 from .cubedata import as_dataset
+from .flags import COMPUTED
 from .layout import atomic_write
 from .query import (
     NO_DATA,
@@ -156,7 +157,7 @@ def _mark_computed(ax, ds: xr.Dataset, sel, x: str, y: str) -> list:
     if "provenance" not in ds:
         return []
     flags = plane(ds, "provenance", (y, x), sel, "map")
-    yy, xx = np.nonzero(flags.values == 0)
+    yy, xx = np.nonzero(flags.values == COMPUTED)
     n, total = len(xx), flags.size
     return ax.plot(flags[x].values[xx], flags[y].values[yy], linestyle="none", marker=".",
                    markersize=2.0, color="0.15", alpha=0.6,

@@ -1,5 +1,5 @@
 """Points of a cube by flat index (C order over ``AXES``; store.cube): checking an
-index, the parameter rows of points, status counts, and :func:`fill`, which writes a
+index, status counts, and :func:`fill`, which writes a
 block's results (a :class:`store.record.BlockRecord`) into a cube in memory."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import numpy as np
 
 from .cube import AXES, output_names, shape_of
 from .record import BlockRecord
-from .status import OK, STATUS_MEANINGS
+from .flags import OK, STATUS_MEANINGS
 
 
 def check_index(ds, flat_index) -> np.ndarray:
@@ -25,22 +25,6 @@ def check_index(ds, flat_index) -> np.ndarray:
             f"got range [{idx.min()}, {idx.max()}]"
         )
     return idx.astype(np.int64)
-
-
-def grid_points(ds, flat_index=None) -> np.ndarray:
-    """Parameter rows ``(n, 4)`` float64 of the points ``flat_index`` (all by default).
-
-    Columns follow ``AXES`` (the engine's ``POINT_AXES`` order: W, omega, v_ref, vd).
-    """
-    size = int(np.prod(shape_of(ds)))
-    idx = np.arange(size) if flat_index is None else check_index(ds, flat_index)
-    multi = np.unravel_index(idx, shape_of(ds))
-    return np.column_stack([ds[a].values[m] for a, m in zip(AXES, multi)]).astype(np.float64)
-
-
-def pending_index(ds) -> np.ndarray:
-    """Flat indices of the points whose status is not ok (to resume a sweep)."""
-    return np.flatnonzero(ds["status"].values.reshape(-1) != OK)
 
 
 def status_counts(ds) -> dict[str, int]:

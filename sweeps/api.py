@@ -76,7 +76,7 @@ def open_sweep(key: str, store: str | Path | None = None, *, chunks=None):
     installed one, and one per accuracy warning the cube records (as ``ditherlab query``
     says them); a :class:`sweeps.InferredPointsWarning` when it is refined
     (``refine = true``) with inferred points, whose outputs are a computed neighbour's
-    (``ds.where(ds.provenance == 0)`` keeps the computed ones). Raises
+    (``ds.where(ds.provenance == store.COMPUTED)`` keeps the computed ones). Raises
     ``sweeps.errors.UserError`` when no sweep matches or the cube is another sweep's, and its
     subclass ``AmbiguousSweepError`` (also a ``LookupError``) when a name fits several
     current sweeps, listing them: pass an id.

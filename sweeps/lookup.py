@@ -21,8 +21,11 @@ STALE = "stale: engine changed"
 
 
 def store_root(arg: str | os.PathLike | None = None) -> Path:
-    """The store folder: ``arg``, else ``$DITHERLAB_STORE``, else ``./ditherlab-store``."""
-    return Path(arg or os.environ.get("DITHERLAB_STORE") or "ditherlab-store")
+    """The store folder: ``arg``, else ``$DITHERLAB_STORE``, else ``./ditherlab-store``
+    (the one default store: every command, the API, the gallery and the web view)."""
+    from store.layout import DEFAULT_STORE, ENV_STORE
+
+    return Path(arg or os.environ.get(ENV_STORE) or DEFAULT_STORE)
 
 
 def catalogue(root: Path):
@@ -161,16 +164,18 @@ def check_cube_of(ds, sweep_id: str, cube: Path) -> None:
 def inferred_note(provenance) -> str | None:
     """One line saying how many of these points a refined sweep inferred, or None.
 
-    ``provenance`` is the cube's flag (sweeps.planning.refine: 0 computed, 1 inferred), whole or a
-    selection. An inferred point holds a computed neighbour's outputs: they settle the
+    ``provenance`` is the cube's flag (store.flags: ``COMPUTED``, ``INFERRED``), whole or
+    a selection. An inferred point holds a computed neighbour's outputs: they settle the
     map's class there (zone, stability label) but are not computed values."""
     import numpy as np
 
+    from store.flags import INFERRED
+
     flags = np.asarray(provenance)
-    n = int((flags == 1).sum())
+    n = int((flags == INFERRED).sum())
     if not n:
         return None
-    return (f"{n} of {flags.size} points are inferred (provenance = 1; the spec has "
+    return (f"{n} of {flags.size} points are inferred (provenance = {INFERRED}; the spec has "
             "refine = true): their outputs are a computed neighbour's values, which settle the "
             "zone or stability class there but are not computed to the accuracy level's "
             "promise; for computed values everywhere submit the spec with refine = false")

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from engine import params as P
+from store.flags import COMPUTED
 
 from . import plotting as G
 from .verdicts import Check, FigureResult, above, below, monotone
@@ -41,7 +42,7 @@ def computed_note(ds) -> str:
     """Which points of a (refined) cube were computed."""
     if "provenance" not in ds:
         return f"every point computed ({ds[ZONE].size})"
-    n = int((ds.provenance == 0).sum())
+    n = int((ds.provenance == COMPUTED).sum())
     return (f"{n} of {ds.provenance.size} points computed (refined sweep: the cells whose "
             "corners agree are inferred from them; black dots on the map)")
 
@@ -64,7 +65,7 @@ def fig14(ctx) -> FigureResult:
                        "elasto-plastic slider", width=5.5, height=4.0)
     _draw_zone(ax[0], ds, f"{ds.sizes['W']} x {ds.sizes['omega']} grid")
     if "provenance" in ds:
-        pc = (ds.provenance.isel(v_ref=0, v_d=0) == 0).stack(p=("W", "omega"))
+        pc = (ds.provenance.isel(v_ref=0, v_d=0) == COMPUTED).stack(p=("W", "omega"))
         pc = pc[pc]
         ax[0].plot(pc.omega, pc.W, "k.", ms=1.5, label="computed")
     wc = critical_omega(ds)

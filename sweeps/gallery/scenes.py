@@ -92,10 +92,6 @@ def get_scene(name: str) -> GalleryScene:
                            f"{', '.join(REGISTRY)} (`ditherlab scenes` lists them)") from None
 
 
-def scene_spec(name: str, size: str = "full") -> dict:
-    return get_scene(name).spec(size)
-
-
 def read_spec_file(file_name: str) -> dict:
     path = SPECS / file_name
     try:

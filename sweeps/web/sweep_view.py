@@ -67,13 +67,14 @@ def _estimate(detail: dict) -> list[dict]:
 
 
 def _counts(ds) -> dict:
+    from store.flags import COMPUTED, INFERRED
     from store.points import status_counts
 
     counts = status_counts(ds)
     if "provenance" in ds:
         flags = ds["provenance"].values
-        counts["computed"] = int((flags == 0).sum())
-        counts["inferred"] = int((flags == 1).sum())
+        counts["computed"] = int((flags == COMPUTED).sum())
+        counts["inferred"] = int((flags == INFERRED).sum())
     return counts
 
 

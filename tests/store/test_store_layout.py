@@ -1,5 +1,7 @@
 """Store folder layout (README 'Store layout', DESIGN.md §5 default store)."""
 
+from pathlib import Path
+
 import pytest
 
 import store
@@ -26,11 +28,13 @@ def test_sweep_dir_refuses_non_folder_names(tmp_path, bad):
         store.SweepDir(tmp_path, bad)
 
 
-def test_default_store(monkeypatch, tmp_path):
+def test_the_default_store_is_read_where_every_command_reads_it(monkeypatch, tmp_path):
+    from sweeps.lookup import store_root   # the one helper over store.layout's names
+
     monkeypatch.delenv(layout.ENV_STORE, raising=False)
-    assert str(store.default_store()) == "ditherlab-store"
+    assert str(store_root()) == layout.DEFAULT_STORE == "ditherlab-store"
     monkeypatch.setenv(layout.ENV_STORE, str(tmp_path))
-    assert store.default_store() == tmp_path
+    assert store_root() == tmp_path and store_root("elsewhere") == Path("elsewhere")
 
 
 def test_atomic_write_failure_leaves_nothing(tmp_path):
