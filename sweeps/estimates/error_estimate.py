@@ -143,13 +143,6 @@ def _warning(name: str, change: float, promised: float, level: str, finer: str) 
             f"the {level} level promises ({promised:.0e}); {advice}")
 
 
-def warnings_of(ds) -> list[str]:
-    """The accuracy warnings recorded in a cube (empty when there are none)."""
-    from store.attrs import accuracy_warnings
-
-    return accuracy_warnings(ds.attrs)
-
-
 def attach(cube, estimate: dict) -> None:
     """Record ``estimate`` (from :func:`compare`) in the cube's attributes."""
     cube.attrs["error_estimate"] = json.dumps(estimate)
