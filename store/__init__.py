@@ -87,7 +87,7 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "atomic": ["atomic_write"],
         "layout": ["SweepDir"],
         "points": ["fill", "status_counts"],
-        "axes": ["FORMATS", "figure_format"],
+        "axes": ["FIGURE_FORMATS", "figure_format"],
         "maps": ["friction_curves", "stability_map",
                  "stick_slip_map"],
         "query": ["NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select",

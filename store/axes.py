@@ -9,7 +9,7 @@ import xarray as xr
 
 SYMBOLS = {"W": r"$W$", "omega": r"$\omega$", "v_ref": r"$v_\mathrm{ref}$", "v_d": r"$v_d$"}
 
-FORMATS = ("png", "pdf", "svg")
+FIGURE_FORMATS = ("png", "pdf", "svg")
 
 
 def figure_format(path) -> str:
@@ -21,9 +21,9 @@ def figure_format(path) -> str:
     """
     path = Path(path)
     fmt = path.suffix.lower().lstrip(".")
-    if fmt not in FORMATS:
+    if fmt not in FIGURE_FORMATS:
         raise ValueError(f"cannot write {path}: the file name must end in "
-                         f"{', '.join('.' + f for f in FORMATS)} (got {path.suffix or 'none'})")
+                         f"{', '.join('.' + f for f in FIGURE_FORMATS)} (got {path.suffix or 'none'})")
     folder = path.parent
     above = next((a for a in (folder, *folder.parents) if a.exists()), None)
     if above is not None and not above.is_dir():

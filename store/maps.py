@@ -3,7 +3,7 @@
 Drawn with matplotlib's object API on an Agg canvas (no pyplot, no global backend
 switch, safe in threads and on machines without a display). Every figure is
 ``FIGSIZE`` inches at ``DPI`` (980 x 700 pixels for PNG), written atomically in the
-format its suffix names (``FORMATS``: png, pdf, svg) into an existing folder.
+format its suffix names (``FIGURE_FORMATS``: png, pdf, svg) into an existing folder.
 
 - ``stability_map``: v_ref on x, W on y; PU and SU shaded, their boundaries drawn
   solid (PU) and dashed (SU) as in Fig. 9, and the line W = v_ref. The labels are

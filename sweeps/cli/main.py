@@ -27,8 +27,8 @@ from contextlib import contextmanager
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
 from ..exports import MAPS, QUERY_FORMATS
 from ..workers.batch import KINDS as BATCH_KINDS
-from .scenes import add_commands as add_scene_commands
-from ..web.cli import add_commands as add_web_commands
+from .gallery_commands import add_commands as add_gallery_commands
+from .web_commands import add_commands as add_web_commands
 from .reading import cmd_map, cmd_query, cmd_status
 from .running import cmd_cancel, cmd_plan, cmd_serve, cmd_submit
 
@@ -111,8 +111,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="remember the estimates in the store, so that the next plan says how "
                    "far off they were (plan writes nothing otherwise)")
     p.set_defaults(func=cmd_plan)
-    add_scene_commands(sub, common)   # scenes, gallery, --scene (sweeps.cli.scenes)
-    add_web_commands(sub, common)     # web, serve --web (sweeps.web.cli)
+    add_gallery_commands(sub, common)   # scenes, gallery, --scene (cli.gallery_commands)
+    add_web_commands(sub, common)     # web, serve --web (cli.web_commands)
     return ap
 
 

@@ -17,7 +17,7 @@ from ..lookup import (STALE, catalogue, inferred_note, is_stale, open_checked, r
 
 def parse_sel(items: list[str] | None) -> dict[str, float]:
     """``--sel AXIS=VALUE ...`` as a dict, by the rules of sweeps.exports.parse_selection
-    (``map --kind friction`` takes several W curves before this, sweeps.cli.scenes)."""
+    (``map --kind friction`` takes several W curves before this, sweeps.cli.gallery_commands)."""
     pairs = []
     for item in items or ():
         axis, eq, value = item.partition("=")

@@ -13,7 +13,7 @@ from __future__ import annotations
 import sys
 
 from ..lookup import store_root
-from .security import DEFAULT_BIND, parse_bind, server_token
+from ..web.security import DEFAULT_BIND, parse_bind, server_token
 
 
 def add_commands(sub, common) -> None:
@@ -44,7 +44,7 @@ def _token_option(p) -> None:
 def _prepare(root, bind: str, token_file: str | None, option: str):
     """Check the address and token before anything listens; returns ``(ctx, host, port,
     the line to print)``."""
-    from .app import Context
+    from ..web.app import Context
 
     host, port = parse_bind(bind, option)
     token, generated = server_token(host, token_file)
@@ -61,7 +61,7 @@ def _prepare(root, bind: str, token_file: str | None, option: str):
 def cmd_web(args) -> int:
     import asyncio
 
-    from .app import server_port, start
+    from ..web.app import server_port, start
 
     ctx, host, port, link = _prepare(store_root(args.store), args.bind, args.token_file,
                                      "--bind")
@@ -95,7 +95,7 @@ def _serve_with_web(serve_cmd):
 
                 raise RefusedError("--token-file applies with --web only")
             return serve_cmd(args)
-        from .app import start_in_thread
+        from ..web.app import start_in_thread
 
         ctx, host, port, link = _prepare(store_root(args.store), args.web, args.token_file,
                                          "--web")
