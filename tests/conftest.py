@@ -1,12 +1,18 @@
-"""Two kinds of tests are opt-in, named by their marker in ``-m``:
+"""Markers (pyproject.toml) say what a test starts, and two of them what it costs:
 
+- by kind: ``cluster`` (a dask cluster: LocalCluster, a scheduler and workers by hand),
+  ``subprocess`` (the ``ditherlab`` command or another Python process), ``browser`` (a
+  real browser through selenium), ``slurm`` (a single-node Slurm): ``scripts/test -m slurm``
+  runs the Slurm tests, ``-m "not browser"`` all but the browser's.
 - ``long``: tests that take long but guard what users rely on (sweeps on a real dask
   cluster, kills and disk faults, the browser, Slurm, whole gallery figures and their
-  wrong-model checks, the promise check over every shipped spec). Deselected
-  unless ``-m`` names them, so ``scripts/test`` stays a few minutes; ``.ci/run`` runs
-  ``scripts/test`` and then ``scripts/test -m long``, so CI runs every one of them.
+  wrong-model checks, the promise check over every shipped spec). Deselected when ``-m``
+  is not given, so ``scripts/test`` stays a few minutes; any ``-m`` expression chooses for
+  itself (``-m long``: the long set; ``-m slurm``: the Slurm tests, all long).
+  ``.ci/run`` runs ``scripts/test`` and then ``scripts/test -m long``: CI runs every one.
 - ``slow``: the studies (the full hard-case suite, the fault campaign): skipped with the
-  command that runs them (``scripts/test -m slow tests/hard``); CI does not run them.
+  command that runs them (``scripts/test -m slow tests/hard``) unless ``-m`` names them;
+  CI does not run them.
 """
 from __future__ import annotations
 
@@ -19,7 +25,7 @@ HERE = pathlib.Path(__file__).parent
 
 def pytest_collection_modifyitems(config, items):
     markexpr = config.getoption("markexpr") or ""
-    if "long" not in markexpr:
+    if not markexpr.strip():
         long = [item for item in items if item.get_closest_marker("long")]
         if long:
             config.hook.pytest_deselected(items=long)
@@ -34,5 +40,5 @@ def pytest_collection_modifyitems(config, items):
 
 
 def pytest_report_header(config):
-    if "long" not in (config.getoption("markexpr") or ""):
+    if not (config.getoption("markexpr") or "").strip():
         return "long tests deselected: `scripts/test -m long` runs them (.ci/run does)"

@@ -16,7 +16,8 @@ from sweeps.gallery.verdicts import HOLDS, PARTLY
 SLOW = {"fig14", "beyond_scaling"}
 # the module's fixture draws 15 figures (about 2 min of CPU): on a 2-core machine shared by
 # seven jobs (load 30) it took over 15 min, past the suite's 900 s hang guard
-pytestmark = [pytest.mark.long, pytest.mark.timeout(2400)]   # long: whole figures of the gallery
+pytestmark = [pytest.mark.long, pytest.mark.timeout(2400),   # long: whole figures of the gallery
+              pytest.mark.cluster]
 PNG = b"\x89PNG\r\n\x1a\n"
 
 

@@ -16,6 +16,8 @@ from sweeps.gallery.build import FIGURES
 from sweeps.gallery.context import Context
 from sweeps.gallery.verdicts import FAILS, HOLDS, PARTLY
 
+pytestmark = pytest.mark.cluster   # what it starts (tests/conftest.py)
+
 #: the paper model's verdicts at the small size (and per reading where there are readings)
 CORRECT = {
     "fig01": (HOLDS, {}),

@@ -19,6 +19,8 @@ import numpy as np
 import store
 from storetest_cubes import averaged_cube
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 root = sys.argv[1]
 sweep = store.SweepDir(root, "c0ffee")
 empty = averaged_cube()

@@ -12,6 +12,8 @@ from sweeps.spec.accuracy import PROMISE_OVERRIDES, TARGET_ERROR, promise
 
 from .conftest import ditherlab
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 # the Sec. 7 slider without dither at explicit DP5 rtol 1e-4: the slip share (sliding =
 # |z| within 1e-9 of z_ss) needs the bristle state to ~1e-10 and moves by ~1e-2 between
 # rtol 1e-4 and the finer 1e-6 (engine.observables), far over the standard promise 1e-3

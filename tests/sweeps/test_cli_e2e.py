@@ -11,6 +11,8 @@ from sweeps.spec import load_spec
 
 from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 AXES = ("W", "omega", "v_ref", "v_d")
 
 

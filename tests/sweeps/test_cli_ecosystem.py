@@ -15,6 +15,8 @@ import sweeps
 from sweeps import cli
 from sweeps.errors import AmbiguousSweepError
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 AVERAGED = {"name": "eco-avg", "friction": "lugre", "method": "averaged",
             "grid": {"W": [0.0, 0.4], "v_ref": [0.1, 0.2, 0.3]}}
 HEAVY = ("numba", "dask", "distributed", "xarray", "matplotlib", "scipy", "pydantic")

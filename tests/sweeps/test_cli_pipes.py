@@ -8,6 +8,8 @@ import pytest
 
 from .conftest import BIN
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 
 @pytest.mark.long
 def test_a_reader_that_stops_early_gets_no_error_line():

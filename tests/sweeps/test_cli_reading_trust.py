@@ -13,6 +13,8 @@ from sweeps.lookup import resolve_sweep
 
 from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 TINY = AVERAGED_SPEC.replace('name = "e2e-avg"', 'name = "tiny"').replace(
     'W = { start = 0.0, stop = 1.0, num = 21 }', "W = [0.0, 1e-11, 3e-11]").replace(
     'v_ref = { start = 0.02, stop = 1.0, num = 25 }', "v_ref = [0.5]")

@@ -19,7 +19,8 @@ from sweeps.spec import load_spec
 
 from .conftest import BIN, SIMULATE_SPEC, ditherlab
 
-pytestmark = pytest.mark.long   # dask clusters and resumes
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+# dask clusters and resumes
 
 DASK = Path(sys.executable).parent / "dask"
 TIMING = ("cost_s",)  # wall-clock seconds differ between runs; everything else must not

@@ -25,6 +25,8 @@ from ..guarantee import skip_unless_ci
 from .conftest import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab
 from .test_cluster_and_resume import RESUME_SPEC, _wait_for
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 N_BLOCKS_AVG = 8   # AVERAGED_SPEC: 525 points in 8 blocks, computed in-process (no dask)
 
 

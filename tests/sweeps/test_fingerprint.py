@@ -133,6 +133,8 @@ LOADED_BY_A_RUN = """
 import json, sys, warnings
 import sweeps.api, sweeps.lookup, sweeps.spec.load
 from sweeps.spec import parse_spec
+
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
                     "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
                              "v_ref": {{"start": 0.05, "stop": 1.0, "num": 9}}}}}})

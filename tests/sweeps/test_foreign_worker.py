@@ -27,7 +27,8 @@ from sweeps.version import results_fingerprint
 
 from .test_hpc import _wait_for, _wait_for_workers
 
-pytestmark = pytest.mark.long   # dask workers of another engine
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+# dask workers of another engine
 
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = {"name": "foreign", "friction": "lugre", "dither": "square-velocity",

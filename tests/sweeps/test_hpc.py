@@ -15,7 +15,8 @@ import pytest
 
 import sweeps
 
-pytestmark = pytest.mark.long   # a dask scheduler and workers started by hand
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+# a dask scheduler and workers started by hand
 
 SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity", "outputs": ["v_mean"],
         "accuracy": "draft", "time": {"t_end": 4.0, "t_transient": 1.0},

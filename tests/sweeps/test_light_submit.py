@@ -12,6 +12,8 @@ import pytest
 
 from .conftest import AVERAGED_SPEC
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 HEAVY = ("xarray", "pandas", "dask.array", "distributed", "matplotlib")
 
 

@@ -19,7 +19,8 @@ import pytest
 
 from .conftest import SIMULATE_SPEC
 
-pytestmark = pytest.mark.long   # every socket of submit and serve
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+# every socket of submit and serve
 
 BIN = str(Path(sys.executable).parent / "ditherlab")
 

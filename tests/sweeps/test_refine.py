@@ -20,6 +20,8 @@ from sweeps.planning.refine import Refinement, default_stride
 from .conftest import BIN
 from .test_cluster_and_resume import assert_same_results, results
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 
 def refine_synthetic(truth: np.ndarray, path="simulate", margin=None, coarse=None):
     """Drive a Refinement over a known class field; (inferred class per point, computed)."""

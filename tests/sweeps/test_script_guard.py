@@ -10,6 +10,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = [pytest.mark.cluster, pytest.mark.subprocess]   # what it starts (tests/conftest.py)
+
 ROOT = Path(__file__).resolve().parents[2]
 SPEC = ('{"name": "guard", "friction": "lugre", "dither": "none", "outputs": ["F_mean"], '
         '"accuracy": "draft", "time": {"t_end": 2.0, "t_transient": 1.0}, '

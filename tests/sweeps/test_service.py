@@ -29,7 +29,8 @@ from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
-pytestmark = pytest.mark.long   # the queue's processes: kills, signals, two submitters
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+# the queue's processes: kills, signals, two submitters
 
 # 16 one-point blocks; a test acts on the running sweep while it holds them at the gate (it
 # needed blocks of 0.3-2 s, t_end = 900, to have time to act between them, and hoped)

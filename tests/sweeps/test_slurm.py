@@ -31,7 +31,8 @@ from . import slurm
 
 # a first run compiles the kernels in the local run and in the jobs: 900 s was too short
 # with the machine's two cores shared by 30 processes
-pytestmark = [pytest.mark.long, pytest.mark.slurm, pytest.mark.timeout(2400)]   # long: a real Slurm
+pytestmark = [pytest.mark.long, pytest.mark.slurm, pytest.mark.cluster,   # a real Slurm
+              pytest.mark.subprocess, pytest.mark.timeout(2400)]
 
 SPEC = {"name": "slurm", "friction": "lugre", "dither": "square-velocity",
         "outputs": ["F_mean", "v_mean", "v_slow_p2p"], "accuracy": "draft", "block_size": 1,

@@ -19,7 +19,7 @@ import pytest
 
 from .conftest import RUNNING_ID, ditherlab
 
-pytestmark = pytest.mark.long   # a real browser
+pytestmark = [pytest.mark.long, pytest.mark.browser, pytest.mark.subprocess]   # a real browser
 
 CHROMIUM = os.environ.get("DITHERLAB_CHROMIUM", "/usr/bin/chromium")
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",

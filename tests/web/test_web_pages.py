@@ -14,6 +14,8 @@ import pytest
 
 from .conftest import BIN, RUNNING_ID, ditherlab, request
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 
 @pytest.mark.parametrize("fmt,args,query", [
     ("csv", ["--sel", "v_d=0.1"], "sel.v_d=0.1"),
