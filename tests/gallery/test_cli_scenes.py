@@ -8,28 +8,24 @@ import pytest
 from sweeps.cli.main import main
 from sweeps.gallery.scenes import REGISTRY, SPECS, get_scene, shrink
 
+from ..helpers import in_process
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _run(capsys, *argv):
-    status = main(list(argv))
-    out = capsys.readouterr()
-    return status, out.out, out.err
-
-
-def test_scenes_lists_every_scene_with_its_points(capsys):
-    status, out, _ = _run(capsys, "scenes")
+def test_scenes_lists_every_scene_with_its_points():
+    status, out, _ = in_process("scenes")
     assert status == 0
     for scene in REGISTRY.values():
         line = next(l for l in out.splitlines() if l.startswith(scene.name + " "))
         assert line.split()[1:3] == [str(scene.n_points("small")), str(scene.n_points("full"))]
 
 
-def test_scenes_lists_every_figure_the_gallery_draws_with_its_recipe(capsys):
+def test_scenes_lists_every_figure_the_gallery_draws_with_its_recipe():
     """A user finds Fig. 12 (a trajectory figure, no sweep) from the command line."""
     from sweeps.gallery.build import FIGURES, RECIPES
 
-    _, out, _ = _run(capsys, "scenes")
+    _, out, _ = in_process("scenes")
     assert set(RECIPES) == set(FIGURES)
     for key, recipe in RECIPES.items():
         assert f"{key:<15}{recipe}" in out.splitlines()
@@ -58,8 +54,8 @@ def test_scenes_lists_every_figure_the_gallery_draws_with_its_recipe(capsys):
     (("map", "fig14", "--kind", "friction", "--pick", "0", "-o", "x.png"), "--pick: must be >= 1"),
     (("gallery", "--only", "fig03"), "--only: unknown figure fig03"),
 ])
-def test_refusals_are_one_line_with_exit_2(capsys, argv, message):
-    status, _, err = _run(capsys, *argv)
+def test_refusals_are_one_line_with_exit_2(argv, message):
+    status, _, err = in_process(*argv)
     assert status == 2
     assert message in err
     assert err.count("\n") == 1 and err.startswith("ditherlab: ")
@@ -114,7 +110,7 @@ def test_map_pick_draws_a_handful_of_w_curves(tmp_path, capsys):
 
 
 def test_a_figure_that_cannot_be_computed_is_not_a_verdict_and_fails_the_command(
-        capsys, tmp_path, monkeypatch):
+        tmp_path, monkeypatch):
     """A figure whose computation raises (e.g. its spec file missing, as in a package
     installed without specs/ before 0.2) is ``not computed`` on the page, never ``does not
     hold`` (a verdict on the paper's claim), and ``gallery`` exits 1 naming it."""
@@ -124,8 +120,8 @@ def test_a_figure_that_cannot_be_computed_is_not_a_verdict_and_fails_the_command
         raise OSError("scene spec fig01-hbm.toml cannot be read")
 
     monkeypatch.setitem(build.FIGURES, "fig01", broken)
-    status, out, err = _run(capsys, "gallery", "--only", "fig01", "-o", str(tmp_path / "g"),
-                            "--store", str(tmp_path / "store"))
+    status, out, err = in_process("gallery", "--only", "fig01", "-o", tmp_path / "g",
+                                  "--store", tmp_path / "store")
     assert status == 1
     assert "fig01           not computed" in out
     assert "ditherlab: fig01 could not be computed: OSError: scene spec" in err

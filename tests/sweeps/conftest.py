@@ -1,13 +1,10 @@
-"""Helpers for end-to-end tests through the real command line."""
+"""Specs and fixtures of the end-to-end tests through the real command line (the command
+itself and the wait loop: tests/helpers.py)."""
 import os
 import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
-
-BIN = Path(sys.executable).parent / "ditherlab"
 
 
 def as_a_terminal_job() -> None:
@@ -45,15 +42,6 @@ W = { start = 0.0, stop = 1.0, num = 21 }
 v_ref = { start = 0.02, stop = 1.0, num = 25 }
 v_d = [0.1]
 """
-
-
-def ditherlab(*args, store=None, check=False, timeout=600) -> subprocess.CompletedProcess:
-    cmd = [str(BIN), *args] + (["--store", str(store)] if store is not None else [])
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
-                          env={**__import__("os").environ, "MPLBACKEND": "Agg"})
-    if check and proc.returncode != 0:
-        raise AssertionError(f"{cmd} -> {proc.returncode}\n{proc.stdout}\n{proc.stderr}")
-    return proc
 
 
 @pytest.fixture

@@ -7,7 +7,6 @@ they drive tests/sweeps/test_spec_fuzz.py (hypothesis) and scripts/fuzz_spec.py 
 from __future__ import annotations
 
 import contextlib
-import io
 import json
 import math
 import re
@@ -177,17 +176,15 @@ def check(case: Case, tmp: Path, index: int = 0, commands=("plan",)) -> dict:
 
 
 def _cli_faults(command: str, path: Path, store: Path) -> list[str]:
-    from sweeps import cli
+    from ..helpers import in_process
 
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-        rc = cli.main([command, str(path), "--store", str(store)])
+    rc, _, err = in_process(command, path, "--store", store)
     faults = []
     if rc != 2:
-        faults.append(f"cli {command} exit {rc}: {err.getvalue()[:150]}")
+        faults.append(f"cli {command} exit {rc}: {err[:150]}")
     if store.exists():
         faults.append(f"cli {command} wrote to the store: {sorted(store.rglob('*'))[:3]}")
-    lines = err.getvalue().splitlines()
+    lines = err.splitlines()
     if not lines or lines[0] != "ditherlab: invalid sweep spec:":
         faults.append(f"cli {command}: unexpected first line {lines[:1]}")
     return faults

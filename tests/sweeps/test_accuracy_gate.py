@@ -10,7 +10,7 @@ import store
 from sweeps.estimates import error_estimate as errors
 from sweeps.spec.accuracy import PROMISE_OVERRIDES, TARGET_ERROR, promise
 
-from .conftest import ditherlab
+from ..helpers import ditherlab
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -9,7 +9,8 @@ import xarray as xr
 
 from sweeps.spec import load_spec
 
-from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
+from ..helpers import ditherlab
+from .conftest import AVERAGED_SPEC, SIMULATE_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from .conftest import BIN
+from ..helpers import BIN
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -11,7 +11,8 @@ import pytest
 import store
 from sweeps.lookup import resolve_sweep
 
-from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
+from ..helpers import ditherlab
+from .conftest import AVERAGED_SPEC, SIMULATE_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -7,7 +7,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +16,8 @@ import xarray as xr
 import store
 from sweeps.spec import load_spec
 
-from .conftest import BIN, SIMULATE_SPEC, ditherlab
+from ..helpers import BIN, ditherlab, wait_for
+from .conftest import SIMULATE_SPEC
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # dask clusters and resumes
@@ -35,14 +35,6 @@ def assert_same_results(a, b):
     xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
 
 
-def _wait_for(predicate, timeout, what, poll=0.2):
-    t0 = time.monotonic()
-    while not predicate():
-        if time.monotonic() - t0 > timeout:
-            raise AssertionError(f"timed out waiting for {what}")
-        time.sleep(poll)
-
-
 def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
     path = spec_file(SIMULATE_SPEC)
     spec = load_spec(path)
@@ -54,7 +46,7 @@ def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
                                "--no-dashboard", "--scheduler-file", str(sched_file)],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        _wait_for(sched_file.exists, 60, "the scheduler file")
+        wait_for(sched_file.exists, "the scheduler file", 60)
         for _ in range(2):
             procs.append(subprocess.Popen(
                 [str(DASK), "worker", "--scheduler-file", str(sched_file), "--nthreads", "1",
@@ -99,8 +91,8 @@ def test_kill_9_then_resume_equals_clean_run(tmp_path, spec_file, env, gate):
     n_blocks = 32
     gate.let(3)
     done = lambda: len(store.Journal(journal).files())   # journaled blocks
-    _wait_for(lambda: done() >= 3 or proc.poll() is not None, 300, "three journaled blocks",
-              poll=0.02)
+    wait_for(lambda: done() >= 3 or proc.poll() is not None, "three journaled blocks", 300,
+             poll=0.02)
     os.killpg(proc.pid, signal.SIGKILL)  # the submitter and its local cluster, mid-flight
     proc.wait()
     gate.open()

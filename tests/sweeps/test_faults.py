@@ -22,8 +22,9 @@ from sweeps.run.submit import submit
 from sweeps.spec import load_spec
 
 from ..guarantee import skip_unless_ci
-from .conftest import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab
-from .test_cluster_and_resume import RESUME_SPEC, _wait_for
+from ..helpers import BIN, ditherlab, wait_for
+from .conftest import AVERAGED_SPEC, as_a_terminal_job
+from .test_cluster_and_resume import RESUME_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -218,8 +219,8 @@ def test_disk_filling_up_mid_run_stops_with_one_line_and_resumes(tmp_path, spec_
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     journal = root / spec.sweep_id / "journal"
     gate.let(3)
-    _wait_for(lambda: len(store.Journal(journal).files()) >= 3 or proc.poll() is not None,
-              300, "three journaled blocks", poll=0.02)
+    wait_for(lambda: len(store.Journal(journal).files()) >= 3 or proc.poll() is not None,
+             "three journaled blocks", 300, poll=0.02)
     filler = root.parent / "filler"
     subprocess.run(["dd", "if=/dev/zero", f"of={filler}", "bs=4k"], capture_output=True)
     gate.open()
@@ -347,8 +348,8 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
                             start_new_session=True, preexec_fn=as_a_terminal_job)
     gate.let(2)
-    _wait_for(lambda: len(store.Journal(journal).files()) >= 2 or proc.poll() is not None,
-              300, "two journaled blocks", poll=0.02)
+    wait_for(lambda: len(store.Journal(journal).files()) >= 2 or proc.poll() is not None,
+             "two journaled blocks", 300, poll=0.02)
     os.killpg(proc.pid, signal.SIGINT)
     try:
         out, err = proc.communicate(timeout=300)

@@ -25,7 +25,8 @@ import store
 import sweeps
 from sweeps.version import results_fingerprint
 
-from .test_hpc import _wait_for, _wait_for_workers
+from ..helpers import wait_for
+from .test_hpc import _wait_for_workers, _written
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # dask workers of another engine
@@ -76,7 +77,8 @@ def scheduler(tmp_path):
         _wait_for_workers(address, n_before + 1)
 
     try:
-        address = _wait_for(sched_file)["address"]
+        address = wait_for(lambda: _written(sched_file), f"{sched_file} written", 120,
+                           process=procs[0])["address"]
         yield address, start, elsewhere
     finally:
         for p in procs[::-1]:

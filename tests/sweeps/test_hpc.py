@@ -8,12 +8,13 @@ import json
 import os
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
 
 import sweeps
+
+from ..helpers import wait_for
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # a dask scheduler and workers started by hand
@@ -23,13 +24,10 @@ SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity", "output
         "grid": {"W": [0.0, 0.3], "omega": [200.0], "v_ref": [0.2, 0.4]}}
 
 
-def _wait_for(path, seconds=120.0):
-    t0 = time.monotonic()
-    while not path.exists() or not path.read_text().strip():
-        if time.monotonic() - t0 > seconds:
-            raise TimeoutError(f"{path} not written in {seconds} s")
-        time.sleep(0.2)
-    return json.loads(path.read_text())
+def _written(path) -> dict | None:
+    """The JSON at ``path`` once it is written, else None."""
+    text = path.read_text() if path.exists() else ""
+    return json.loads(text) if text.strip() else None
 
 
 def _wait_for_workers(address: str, n: int, seconds=120.0) -> None:
@@ -48,7 +46,8 @@ def batch_cluster(tmp_path):
                                "--scheduler-file", str(sched_file)], env=env,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
     try:
-        address = _wait_for(sched_file)["address"]
+        address = wait_for(lambda: _written(sched_file), f"{sched_file} written", 120,
+                           process=procs[0])["address"]
         procs += [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker",
                                     "--scheduler-file", str(sched_file), "--nthreads", "1",
                                     "--nworkers", "1", "--no-dashboard"], env=env,

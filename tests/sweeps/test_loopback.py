@@ -10,19 +10,16 @@ from __future__ import annotations
 
 import os
 import subprocess
-import sys
-import time
 from pathlib import Path
 
 import psutil
 import pytest
 
+from ..helpers import BIN, ditherlab, wait_for
 from .conftest import SIMULATE_SPEC
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # every socket of submit and serve
-
-BIN = str(Path(sys.executable).parent / "ditherlab")
 
 
 def _listening(pid: int) -> list[tuple[int, str, int]]:
@@ -40,11 +37,7 @@ def _listening(pid: int) -> list[tuple[int, str, int]]:
 def _held_sockets(proc, gate: Path) -> list:
     """The listening sockets once a worker waits at the gate (``waiting-<pid>``): the
     cluster is up (a LocalCluster starts all its workers before the first block)."""
-    t0 = time.monotonic()
-    while not list(gate.glob("waiting-*")):
-        assert proc.poll() is None, proc.communicate()
-        assert time.monotonic() - t0 < 600, "no worker reached the gate in 600 s"
-        time.sleep(0.2)
+    wait_for(lambda: list(gate.glob("waiting-*")), "a worker at the gate", 600, process=proc)
     return _listening(proc.pid)
 
 
@@ -78,10 +71,5 @@ def test_every_socket_binds_loopback(command, tmp_path):
 
 
 def _wait_done(store: str) -> None:
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < 600:
-        out = subprocess.run([BIN, "status", "--store", store], capture_output=True, text=True,
-                             timeout=60)
-        if " done " in f" {out.stdout} ":
-            return
-        time.sleep(0.5)
+    wait_for(lambda: " done " in f" {ditherlab('status', store=store).stdout} ",
+             "the sweep done", 600, poll=0.5)

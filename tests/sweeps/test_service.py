@@ -26,7 +26,8 @@ from sweeps.spec import load_spec
 from sweeps.workers.task import block_key
 from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 
-from .conftest import AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job
+from ..helpers import BIN, ditherlab, wait_for
+from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, as_a_terminal_job
 from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
@@ -39,17 +40,6 @@ SLOW_SPEC = RESUME_SPEC.replace(
     "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]", "W = [0.0, 0.2, 0.4, 0.6]")
 FAST_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1")
 N_SLOW = 16
-
-
-def _wait_for(predicate, timeout, what, poll=0.1):
-    t0 = time.monotonic()
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() - t0 > timeout:
-            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
-        time.sleep(poll)
 
 
 def _row(root, sweep_id):
@@ -100,23 +90,15 @@ class Serve:
 def detach(path, root, env) -> str:
     """``submit --detach``; returns the sweep id it printed (the id is taken from the
     command, not recomputed here: it hashes the engine sources, which may change)."""
-    out = run_cli("submit", str(path), "--detach", store_root=root, env=env).stdout
+    out = ditherlab("submit", str(path), "--detach", store=root, env=env, check=True).stdout
     return out.split(":")[0]
-
-
-def run_cli(*args, store_root, env, check=True):
-    proc = subprocess.run([str(BIN), *args, "--store", str(store_root)], capture_output=True,
-                          text=True, env=env, timeout=600, check=False)
-    if check and proc.returncode != 0:
-        raise AssertionError(f"{args} -> {proc.returncode}\n{proc.stdout}\n{proc.stderr}")
-    return proc
 
 
 def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, env):
     root = tmp_path / "store"
     fast, avg = spec_file(FAST_SPEC, "fast.toml"), spec_file(AVERAGED_SPEC, "avg.toml")
     t0 = time.monotonic()
-    proc = run_cli("submit", str(fast), "--detach", store_root=root, env=env)
+    proc = ditherlab("submit", str(fast), "--detach", store=root, env=env, check=True)
     took = time.monotonic() - t0
     print(f"submit --detach returned in {took:.2f} s")
     fast_id = proc.stdout.split(":")[0]
@@ -124,18 +106,18 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
     assert "no `ditherlab serve` is running" in proc.stderr
     assert (root / fast_id / "spec.json").exists() and not (root / fast_id / "cube.nc").exists()
     assert _row(root, fast_id)["state"] == "queued"
-    listing = run_cli("status", store_root=root, env=env).stdout
+    listing = ditherlab("status", store=root, env=env, check=True).stdout
     assert "queued" in listing and "wait for `ditherlab serve`" in listing, listing
-    detail = run_cli("status", fast_id[:6], store_root=root, env=env).stdout
+    detail = ditherlab("status", fast_id[:6], store=root, env=env, check=True).stdout
     assert "state: queued" in detail, detail
 
     serve = Serve(root, tmp_path, env)
     try:
-        _wait_for(lambda: _row(root, fast_id)["state"] == "done", 300, "the queued sweep done")
+        wait_for(lambda: _row(root, fast_id)["state"] == "done", "the queued sweep done", 300)
         # a sweep queued while serve runs is picked up too
         avg_id = detach(avg, root, env)
-        _wait_for(lambda: _row(root, avg_id)["state"] == "done", 120, "the second sweep done")
-        listing = run_cli("status", store_root=root, env=env).stdout
+        wait_for(lambda: _row(root, avg_id)["state"] == "done", "the second sweep done", 120)
+        listing = ditherlab("status", store=root, env=env, check=True).stdout
         assert "serve: " in listing and "idle" in listing, listing
         assert serve.stop() == 0, serve.text()
     finally:
@@ -149,7 +131,7 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
             assert (ds["status"] == 0).all()
     assert set(_computed(tmp_path / "blocks.log").values()) == {1}
     # submitting a finished sweep detached again changes nothing
-    again = run_cli("submit", str(fast), "--detach", store_root=root, env=env)
+    again = ditherlab("submit", str(fast), "--detach", store=root, env=env, check=True)
     assert "already complete" in again.stdout
 
 
@@ -158,7 +140,7 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
     path = spec_file(SLOW_SPEC)
     spec = load_spec(path)
     sid = detach(path, root, env)
-    out = run_cli("cancel", "e2e-slow", store_root=root, env=env).stdout
+    out = ditherlab("cancel", "e2e-slow", store=root, env=env, check=True).stdout
     assert out.startswith(f"{sid}: cancelled") and "while queued" in out, out
     assert _row(root, sid)["state"] == "cancelled"
 
@@ -167,12 +149,12 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
     serve = Serve(root, tmp_path, env)
     try:
         gate.let(1)
-        _wait_for(lambda: _journaled(root, sid) >= 1, 300, "a journaled block", poll=0.05)
+        wait_for(lambda: _journaled(root, sid) >= 1, "a journaled block", 300, poll=0.05)
         # the other blocks are held: the cancel is certainly asked for mid-run
         cancel = subprocess.Popen([str(BIN), "cancel", sid, "--wait", "--store", str(root)],
                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                   env=env)
-        _wait_for(lambda: store.Catalogue(root).cancel_requested(sid), 120, "the cancel request")
+        wait_for(lambda: store.Catalogue(root).cancel_requested(sid), "the cancel request", 120)
         gate.open()   # the runner sees the request as its blocks in flight finish
         out, err = cancel.communicate(timeout=600)
         assert cancel.returncode == 0 and out.startswith(f"{sid}: cancelled"), (out, err)
@@ -182,7 +164,7 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
         k = _journaled(root, sid)
         assert 1 <= k < N_SLOW and row["done_blocks"] == k, (k, row)
         assert serve.proc.poll() is None   # serve goes on serving
-        listing = run_cli("status", store_root=root, env=env).stdout
+        listing = ditherlab("status", store=root, env=env, check=True).stdout
         assert "cancelled" in listing and f"{k}/{N_SLOW}" in listing, listing
         assert serve.stop() == 0, serve.text()
     finally:
@@ -191,7 +173,7 @@ def test_cancel_a_queued_and_a_running_sweep_then_resume(tmp_path, spec_file, en
         assert int((ds["status"] == 0).sum()) == k
         assert set(np.unique(ds["status"].values)) == {0, 1}
     # submitting again resumes: only the blocks the journal lacks
-    resumed = run_cli("submit", str(path), "--quiet", store_root=root, env=env).stdout
+    resumed = ditherlab("submit", str(path), "--quiet", store=root, env=env, check=True).stdout
     assert f"ran {N_SLOW - k} blocks" in resumed and "done" in resumed, resumed
     counts = _computed(tmp_path / "blocks.log")
     assert all(counts[key] == 1 for key in _block_keys(spec)), counts
@@ -207,10 +189,10 @@ def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_fil
     serve = Serve(root, tmp_path, env)
     try:
         gate.let(3)
-        _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
+        wait_for(lambda: _journaled(root, sid) >= 3, "three journaled blocks", 300, poll=0.05)
         t0 = time.monotonic()
         os.kill(serve.proc.pid, signal.SIGTERM)   # the other blocks are held meanwhile
-        _wait_for(lambda: "serve: SIGTERM: stopping" in serve.text(), 120, "serve's stop")
+        wait_for(lambda: "serve: SIGTERM: stopping" in serve.text(), "serve's stop", 120)
         gate.open()
         assert serve.proc.wait(timeout=120) == 0, serve.text()
         print(f"serve exited {time.monotonic() - t0:.1f} s after SIGTERM")
@@ -227,7 +209,7 @@ def test_sigterm_of_serve_requeues_and_the_next_serve_resumes(tmp_path, spec_fil
 
     serve = Serve(root, tmp_path, env, name="serve2")
     try:
-        _wait_for(lambda: _row(root, sid)["state"] == "done", 300, "the resumed sweep done")
+        wait_for(lambda: _row(root, sid)["state"] == "done", "the resumed sweep done", 300)
         assert serve.stop() == 0
     finally:
         serve.kill()
@@ -245,15 +227,15 @@ def test_serve_killed_9_reads_stalled_and_two_submitters_resume_it_once(
     serve = Serve(root, tmp_path, env)
     try:
         gate.let(3)
-        _wait_for(lambda: _journaled(root, sid) >= 3, 300, "three journaled blocks", poll=0.05)
+        wait_for(lambda: _journaled(root, sid) >= 3, "three journaled blocks", 300, poll=0.05)
     finally:
         serve.kill()   # SIGKILL to serve and its cluster (the other blocks held)
     k = _journaled(root, sid)
     assert k == 3
     before = _computed(tmp_path / "blocks.log")   # includes the blocks lost in flight
-    listing = run_cli("status", store_root=root, env=env).stdout
+    listing = ditherlab("status", store=root, env=env, check=True).stdout
     assert "stalled" in listing and "is gone" in listing, listing
-    detail = run_cli("status", sid, store_root=root, env=env).stdout
+    detail = ditherlab("status", sid, store=root, env=env, check=True).stdout
     assert "state: stalled" in detail and "submit the spec again to resume" in detail, detail
     with xr.open_dataset(root / sid / "cube.nc", engine="h5netcdf") as ds:
         assert set(np.unique(ds["status"].values)) <= {0, 1}
@@ -330,7 +312,7 @@ def test_two_submitters_at_once_compute_each_block_once(tmp_path, spec_file, env
     assert [counts[key] for key in keys] == [1] * len(keys), counts
     clean_env = {k: v for k, v in env.items()
                  if k not in ("DITHERLAB_BLOCK_LOG", "DITHERLAB_BLOCK_GATE")}
-    run_cli("submit", str(path), "--quiet", store_root=clean, env=clean_env)
+    ditherlab("submit", str(path), "--quiet", store=clean, env=clean_env, check=True)
     (cube,) = shared.glob("*/cube.nc")
     assert_same_results(results(cube), results(clean / cube.parent.name / "cube.nc"))
 
@@ -344,7 +326,7 @@ def test_ctrl_c_of_a_submitter_reads_cancelled_not_running(tmp_path, spec_file, 
                             start_new_session=True, preexec_fn=as_a_terminal_job)
     try:
         gate.let(2)
-        _wait_for(lambda: _journaled(root, sid) >= 2, 300, "two journaled blocks", poll=0.05)
+        wait_for(lambda: _journaled(root, sid) >= 2, "two journaled blocks", 300, poll=0.05)
         os.killpg(proc.pid, signal.SIGINT)   # Ctrl-C reaches the whole process group
         proc.communicate(timeout=120)        # (the other blocks are held meanwhile)
     finally:

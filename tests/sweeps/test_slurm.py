@@ -17,7 +17,6 @@ import os
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,6 +26,7 @@ import store
 import sweeps
 from sweeps.version import results_fingerprint
 
+from ..helpers import wait_for
 from . import slurm
 
 # a first run compiles the kernels in the local run and in the jobs: 900 s was too short
@@ -130,11 +130,8 @@ def test_a_worker_job_killed_mid_sweep_costs_only_its_blocks(slurm_env, local_cu
     journal = store.Journal(store.SweepDir(tmp_path / "store",
                                            sweeps.load_spec(SPEC).sweep_id).journal)
     try:
-        t0 = time.monotonic()
-        while not journal.files() or len(slurm.jobs(slurm_env)) < 2:
-            assert proc.poll() is None, proc.communicate()[1]
-            assert time.monotonic() - t0 < 600, "no block journaled, or not 2 jobs, in 600 s"
-            time.sleep(0.2)
+        wait_for(lambda: journal.files() and len(slurm.jobs(slurm_env)) >= 2,
+                 "a journaled block and 2 jobs", 600, process=proc)
         done_before = len(journal.files())
         assert done_before <= 2 < len(SPEC["grid"]["W"])    # blocks remain, held at the gate
         killed = slurm.jobs(slurm_env)[0]
@@ -156,24 +153,19 @@ def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
         (gate / f"ticket{i}").touch()
     proc = _submit(tmp_path, {**slurm_env, "DITHERLAB_BLOCK_GATE": str(gate)})
     try:
-        t0, most = time.monotonic(), 0
-        while most < 2 or len(slurm.jobs(slurm_env)) > 1:
-            most = max(most, len(slurm.jobs(slurm_env)))
-            assert proc.poll() is None, proc.communicate()[1]
-            assert time.monotonic() - t0 < 600, "the idle job did not end in 600 s"
-            time.sleep(0.2)
+        most = [0]   # the most jobs seen at once
+
+        def idle_job_ended() -> bool:
+            now = len(slurm.jobs(slurm_env))
+            most[0] = max(most[0], now)
+            return most[0] >= 2 and now <= 1
+
+        wait_for(idle_job_ended, "2 jobs, then the idle one's end", 600, process=proc)
         assert not (gate / "open").exists() and proc.poll() is None   # the sweep still runs
     finally:
         (gate / "open").touch()
     _finished(proc)
     _same(tmp_path / "store", local_cube)
-
-
-def _wait(what: str, check, seconds: float = 600) -> None:
-    t0 = time.monotonic()
-    while not check():
-        assert time.monotonic() - t0 < seconds, f"{what}: not within {seconds:.0f} s"
-        time.sleep(0.5)
 
 
 def test_serve_cluster_slurm_runs_the_queue_and_holds_no_job_between_sweeps(
@@ -204,12 +196,14 @@ def test_serve_cluster_slurm_runs_the_queue_and_holds_no_job_between_sweeps(
                                   "--jobs", "2"], cwd=tmp_path, env=slurm_env, stdout=out,
                                  stderr=subprocess.STDOUT, start_new_session=True)
     try:
-        _wait("the first sweep done", lambda: state(first) == "done")
-        _wait("its batch jobs ended while serve waits", lambda: not slurm.jobs(slurm_env), 120)
+        wait_for(lambda: state(first) == "done", "the first sweep done", poll=0.5)
+        wait_for(lambda: not slurm.jobs(slurm_env), "its batch jobs ended while serve waits",
+                 120, poll=0.5)
         assert serve.poll() is None, log.read_text()
         later = detach(second, "second")
-        _wait("the sweep queued after the jobs ended done", lambda: state(later) == "done")
-        _wait("the jobs ended again", lambda: not slurm.jobs(slurm_env), 120)
+        wait_for(lambda: state(later) == "done", "the sweep queued after the jobs ended done",
+                 poll=0.5)
+        wait_for(lambda: not slurm.jobs(slurm_env), "the jobs ended again", 120, poll=0.5)
         serve.send_signal(signal.SIGTERM)
         assert serve.wait(timeout=120) == 0, log.read_text()
     finally:

@@ -8,14 +8,12 @@ import http.client
 import json
 import os
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-BIN = Path(sys.executable).parent / "ditherlab"
 HOSTILE = "<script>alert(1)</script>"
 AVERAGED = {"name": "web-avg", "friction": "lugre", "dither": "square-velocity",
             "method": "averaged",
@@ -108,11 +106,6 @@ def request(base: str, path: str, method: str = "GET", headers=None, body=None):
         return resp.status, dict(resp.getheaders()), resp.read()
     finally:
         con.close()
-
-
-def ditherlab(*args, timeout=600) -> subprocess.CompletedProcess:
-    return subprocess.run([str(BIN), *args], capture_output=True, timeout=timeout,
-                          env={**os.environ, "MPLBACKEND": "Agg"})
 
 
 @pytest.fixture

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-from .conftest import RUNNING_ID, ditherlab
+from ..helpers import ditherlab
+from .conftest import RUNNING_ID
 
 pytestmark = [pytest.mark.long, pytest.mark.browser, pytest.mark.subprocess]   # a real browser
 

@@ -12,7 +12,8 @@ import subprocess
 import psutil
 import pytest
 
-from .conftest import BIN, RUNNING_ID, ditherlab, request
+from ..helpers import BIN, ditherlab
+from .conftest import RUNNING_ID, request
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -25,7 +26,7 @@ pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 def test_query_downloads_are_the_bytes_of_ditherlab_query(server, web_store, fmt, args, query):
     base, _ = server
     sid = web_store["avg"]
-    cli = ditherlab("query", sid, "--format", fmt, *args, "--store", str(web_store["root"]))
+    cli = ditherlab("query", sid, "--format", fmt, *args, store=web_store["root"], text=False)
     assert cli.returncode == 0, cli.stderr
     status, headers, body = request(base, f"/sweep/{sid}/query.{fmt}?{query}")
     assert status == 200
