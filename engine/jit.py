@@ -145,7 +145,10 @@ def _name_by_uuid(func, uuid: str | None) -> None:
 
 
 def njit(fn=None, *, refcount: bool = True, **options):
-    """``numba.njit(cache=True, **options)`` with a deterministic dispatcher UUID.
+    """``numba.njit(cache=True, nogil=True, **options)`` with a deterministic dispatcher
+    UUID. ``nogil``: a kernel called from Python releases the GIL while it runs, so
+    threads of one process compute blocks side by side (a small sweep runs in the
+    submitting process on threads, sweeps.run.dispatch).
 
     ``refcount=False`` compiles without numba's runtime (NRT) for a *loop kernel that
     allocates nothing and returns no array* -- it only borrows its caller's arrays. NRT
@@ -155,6 +158,7 @@ def njit(fn=None, *, refcount: bool = True, **options):
     34 ns for C). Allocation in such a kernel fails at compile time, never silently.
     """
     options.setdefault("cache", True)
+    options.setdefault("nogil", True)   # a block kernel lets other threads run (sweeps.run)
     if not refcount:
         options["_nrt"] = False
 

@@ -115,7 +115,17 @@ def _import(kind: str, ref: str, module_name: str):
                 del sys.modules[name]
                 raise
             return module
-        return importlib.import_module(module_name)
+        try:
+            return importlib.import_module(module_name)
+        except ModuleNotFoundError as exc:
+            # `ditherlab` started from a project folder: its packages are importable from
+            # there, as with `python -m` (the console script's sys.path lacks the folder)
+            here = str(Path.cwd())
+            if here in sys.path or exc.name is None or \
+                    exc.name.split(".")[0] != module_name.split(".")[0]:
+                raise
+            sys.path.append(here)
+            return importlib.import_module(module_name)
     except ModelError:
         raise
     except SyntaxError as exc:

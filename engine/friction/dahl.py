@@ -6,9 +6,9 @@
 ``u`` is the interface velocity (``v + W sin(omega tau)`` on the slider with velocity dither).
 With ``dahl_alpha = 1``, ``dz/dt = u - sigma0 |u| z / fc``: LuGre with ``g = fc`` and
 ``sigma1 = 0`` (tests/engine/test_models_dahl.py checks it). The deflection relaxes onto
-``z_ss = fc sgn(u) / sigma0``; below ``dahl_alpha = 1`` it reaches it in finite time (the
-switch ``r = 0`` is landed on; ``sgn(0) = 0`` then holds it there). Switches: ``u`` (the
-corner of ``sgn(u)``) and ``r``. Phases as LuGre's: stick is ``|u| < stick_band``.
+``z_ss = fc sgn(u) / sigma0`` asymptotically for ``dahl_alpha >= 1`` (the allowed range:
+below 1 it would reach it in finite time, where the rate is not Lipschitz). Switches: ``u``
+(the corner of ``sgn(u)``) and ``r``. Phases as LuGre's: stick is ``|u| < stick_band``.
 Steady state: ``F_ss(u) = fc sgn(u) + sigma2 u`` (the averaged path's curve).
 """
 from __future__ import annotations
@@ -19,8 +19,10 @@ from ..contract import FrictionLaw, LawKernels, Param
 
 class Dahl(FrictionLaw):
     name = "dahl"
+    # dahl_alpha < 1 (z reaching z_ss in finite time, the rate not Lipschitz at r = 0) would
+    # need a saturated mode to hold r = 0 without chattering: refused until it has one
     params = {"dahl_alpha": Param(1.0, "1", "Dahl's shape exponent (1: LuGre with g = fc, "
-                                  "sigma1 = 0)", lo=0.0, hi=10.0, lo_open=True)}
+                                  "sigma1 = 0)", lo=1.0, hi=10.0)}
     phases = "band"
 
     def build(self, b):

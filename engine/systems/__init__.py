@@ -8,6 +8,7 @@ and joins them into a :class:`System`:
                             F = law.rates(u, y, dy, hold, p)         (the law's states)
                             dynamics(t, y, p, sq, u, fext, F, dy)    (the system's states)
                             dy[qf] = F                               (F_mean's quadrature)
+                            dy[m0:] = 0                              (the law's modes)
 """
 from __future__ import annotations
 
@@ -75,6 +76,8 @@ def make_system(scene) -> System:
     n_events = lk.n_switches if lk.switches is not None else 0
     switches = lk.switches
 
+    m0 = b.m0
+
     @njit(error_model="numpy")
     def rhs(t, y, p, sq, dy):
         u, fext, hold = drive(t, y, p, sq)
@@ -82,6 +85,8 @@ def make_system(scene) -> System:
         dynamics(t, y, p, sq, u, fext, F, dy)
         if qf >= 0:
             dy[qf] = F
+        for i in range(m0, n):   # modes change only in update_modes, never by a rate
+            dy[i] = 0.0
 
     @njit(inline="always", error_model="numpy")
     def interface(t, y, p, sq):
@@ -128,3 +133,71 @@ def make_system(scene) -> System:
 
 
 __all__ = ["System", "build_context", "make_system"]
+
+
+SENTINEL = 1.2345678e300   # a value no rate or state takes: what a model did not write
+
+
+def probe(scene, p) -> None:
+    """Compile ``scene``'s system and take its first evaluation: ModelError (one line, the
+    user's file and line where known) when a model does not compile, writes outside its
+    states or leaves one unwritten (a wrong number of states), or gives a NaN or an infinity
+    at the first step. Used for models a user brings, before anything is written."""
+    import numpy as np
+
+    try:
+        system = make_system(scene)
+        n, extra = system.n, 8
+        y = np.full(n + extra, SENTINEL)
+        dy = np.full(n + extra, SENTINEL)
+        system.init(p, y[:n])
+        system.rhs(0.0, y[:n], p, 1.0, dy[:n])
+        u, F, a = system.interface(0.0, y[:n], p, 1.0)
+        g = np.full(max(system.n_events, 1) + extra, SENTINEL)
+        system.events(0.0, y[:n], p, 1.0, g[:max(system.n_events, 1)])
+    except ModelError:
+        raise
+    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        raise ModelError(compile_line(scene, exc)) from None
+    who = f"friction {scene.friction!r} on system {scene.system!r}"
+    if (y[n:] != SENTINEL).any() or (dy[n:] != SENTINEL).any():
+        raise ModelError(f"{who}: writes beyond the {n} states it declares (n_states, "
+                         "n_modes, state_names): check its number of states")
+    unset = np.flatnonzero(dy[:n] == SENTINEL)
+    if unset.size:
+        raise ModelError(f"{who}: gives no rate for state {int(unset[0])} of {n}: check its "
+                         "number of states (n_states) and that rates writes dy for each")
+    if system.n_events and (g[system.n_events:] != SENTINEL).any():
+        raise ModelError(f"{who}: its switches write more than the {system.n_events} values "
+                         "it declares (LawKernels.n_switches)")
+    bad = [name for name, v in (("a state", y[:n]), ("a rate", dy[:n]), ("the force", [F]),
+                                ("alpha", [a]), ("the interface velocity", [u]))
+           if not np.isfinite(np.asarray(v, dtype=float)).all()]
+    if bad:
+        raise ModelError(f"{who}: {bad[0]} is NaN or infinite at the first step (t = 0, "
+                         "the initial state): check its equations and parameters")
+
+
+def compile_line(scene, exc: BaseException) -> str:
+    """One line for a model that numba cannot compile (or that raised while building): the
+    first line of the error and the user's file and line."""
+    import re
+
+    text = str(exc)
+    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), type(exc).__name__)
+    where = ""
+    refs = [r for r in (scene.friction, scene.system) if registry.is_import_path(r)]
+    for m in re.finditer(r'File "([^"]+)", line (\d+)', text):
+        path = m.group(1)
+        if not any(s in path for s in ("/engine/", "/numba/", "site-packages")):
+            where = f" (at {path.rsplit('/', 1)[-1]} line {m.group(2)})"
+            break
+    if not where:
+        import traceback
+        for frame in reversed(traceback.extract_tb(exc.__traceback__)):
+            if not any(s in frame.filename for s in ("/engine/", "/numba/", "site-packages")):
+                where = f" (at {frame.filename.rsplit('/', 1)[-1]} line {frame.lineno})"
+                break
+    kind = "numba cannot compile" if type(exc).__module__.startswith("numba") else \
+        f"{type(exc).__name__} while building"
+    return (f"{kind} {' / '.join(refs) or scene.friction}: {first[:200]}{where}")

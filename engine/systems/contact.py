@@ -53,7 +53,6 @@ class Contact(MechanicalSystem):
 
     name = "contact"
     state_names = ()
-    dithers = ("none", "square-velocity", "sine-velocity")
     defaults = P.CONTACT_DEFAULTS
 
     def n_tail(self, scene) -> int:

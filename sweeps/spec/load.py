@@ -122,9 +122,38 @@ def parse_spec(data: dict, *, max_points: int = DEFAULT_MAX_POINTS) -> Spec:
         problems += found
         for note in notes:
             warnings.warn(note, SpecWarning, stacklevel=2)
+    if not problems:
+        problems += _probe_brought_models(spec)
     if problems:
         raise SpecError(problems)
     return spec
+
+
+def _probe_brought_models(spec: Spec) -> list[str]:
+    """A model the spec brings by import path is compiled and takes its first step here, so
+    that bad user code is one line before anything is written (engine.systems.probe)."""
+    from engine import registry
+
+    if not any(registry.is_import_path(r) for r in (spec.friction, spec.system)):
+        return []
+    from engine.contract import ModelError
+    from engine.scene import Scene
+    from engine.systems import probe
+
+    from .grid import base_params
+
+    try:
+        p = base_params(spec)
+        g = spec.grid_facts
+        first = [float(c[0]) for c in g.coords.values()]    # (W, omega, v_ref, v_d)
+        p[[registry.P.W, registry.P.OMEGA, registry.P.V_REF, registry.P.VD]] = first
+        scene = Scene.from_params(p, system=spec.system, friction=spec.friction,
+                                  dither=g.dither, outputs=spec.outputs or (),
+                                  sizes=spec.model_sizes)
+        probe(scene, p)
+    except ModelError as exc:
+        return [str(exc)]
+    return []
 
 
 class SpecWarning(UserWarning):

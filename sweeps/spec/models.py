@@ -257,6 +257,15 @@ class Spec(_Strict):
         return values
 
     @property
+    def brought_models(self) -> dict:
+        """Import path -> digest of its module's source, for the models the spec brings
+        (empty for the built-in ones, which the engine's fingerprint covers)."""
+        from engine import registry
+
+        return {ref: registry.source_digest(ref) for ref in (self.friction, self.system)
+                if registry.is_import_path(ref)}
+
+    @property
     def model_sizes(self) -> tuple:
         """``engine.Scene.sizes``: the lengths of the models' vector parameters."""
         from engine import registry
@@ -295,13 +304,16 @@ class Spec(_Strict):
     def sweep_id(self) -> str:
         """12 hex digits of sha256 over the canonical spec, the package version and the
         results fingerprint (sweeps.version: a hash of the engine sources and of the
-        planning modules that pick levels and tolerances), so a cube made by another
-        engine or another level table is never found as this spec's result."""
+        planning modules that pick levels and tolerances) and, for a model brought by import
+        path, its module's source, so a cube made by another engine, another level table or
+        another version of the user's model is never found as this spec's result."""
         from ..version import results_fingerprint
 
-        blob = json.dumps({"spec": self.canonical(), "engine": __version__,
-                           "engine_fingerprint": results_fingerprint()},
-                          sort_keys=True, separators=(",", ":"))
+        content = {"spec": self.canonical(), "engine": __version__,
+                   "engine_fingerprint": results_fingerprint()}
+        if brought := self.brought_models:   # a user's model: its source is code too
+            content["models"] = brought
+        blob = json.dumps(content, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(blob.encode()).hexdigest()[:12]
 
     @cached_property

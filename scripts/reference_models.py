@@ -1,0 +1,152 @@
+"""Independent references for the Dahl and GMS laws (issue 35), written without the engine.
+
+Method: scipy's ``solve_ivp`` (DOP853, rtol = atol = 1e-10, dense output) on the slider of
+the paper (``de = v_ref - v``, ``dv = e - F``) with sine-velocity dither
+``u = v + W sin(omega t)``, the law's equations written out again here in numpy. Every
+switch is an event of ``solve_ivp`` (terminal): Dahl's ``u = 0`` and ``r = 0``; GMS's
+reversal ``u = 0`` and, per stuck element, ``alpha_i s(u) - |F_i| = 0``. At each event the
+integration stops, the modes are updated from the state there (as the engine's
+``update_modes`` does) and it restarts, so no step crosses a corner. The mean velocity
+comes from the spring stretch, ``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with
+``x = v_ref t - e``, and the mean friction from a quadrature state ``dQ = F``.
+
+Tolerance stated: the references agree with themselves at rtol 1e-9 and 1e-10 to the
+number printed as ``self_check`` (a few 1e-9 or better); tests/engine/test_models_reference.py
+compares the engine's accuracy levels with them.
+
+    .venv/bin/python scripts/reference_models.py            # writes tests/engine/model_references.json
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+OUT = Path(__file__).resolve().parent.parent / "tests" / "engine" / "model_references.json"
+
+SHARED = {"sigma0": 100.0, "sigma2": 0.004, "fc": 1.0, "fs": 1.5, "vs": 0.1, "delta": 2.0}
+CASES = {
+    # name: law, its own parameters, the point (W, omega, v_ref), window
+    "dahl-a1": ("dahl", {"dahl_alpha": 1.0}, (0.3, 20.0, 0.2), (20.0, 5.0)),
+    "dahl-a1.5": ("dahl", {"dahl_alpha": 1.5}, (0.3, 20.0, 0.2), (20.0, 5.0)),
+    "dahl-a2": ("dahl", {"dahl_alpha": 2.0}, (0.0, 0.0, 0.2), (20.0, 5.0)),
+    "gms-3": ("gms", {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0},
+              (0.3, 20.0, 0.1), (20.0, 5.0)),
+    "gms-1-nodither": ("gms", {"k": [100.0], "alpha": [1.0], "C": 50.0},
+                       (0.0, 0.0, 0.1), (30.0, 10.0)),
+}
+
+
+def stribeck(u, q):
+    return q["fc"] + (q["fs"] - q["fc"]) * math.exp(-abs(u / q["vs"]) ** q["delta"])
+
+
+def sgn(x):
+    return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
+
+
+def run(law, own, point, window, rtol=1e-10):
+    W, omega, v_ref = point
+    t_end, t_tr = window
+    q = dict(SHARED)
+    n = len(own["k"]) if law == "gms" else 1
+    k = np.array(own.get("k", [0.0]))
+    a = np.array(own.get("alpha", [0.0]))
+    modes = np.zeros(n)
+
+    def u_of(t, y):
+        return y[1] + W * math.sin(omega * t)
+
+    def force(u, z):
+        if law == "dahl":
+            return q["sigma0"] * z[0] + q["sigma2"] * u
+        return float(np.dot(k, z)) + q["sigma2"] * u
+
+    def rhs(t, y):
+        e, v, z = y[0], y[1], y[2:2 + n]
+        u = u_of(t, y)
+        if law == "dahl":
+            r = 1.0 - q["sigma0"] * z[0] * sgn(u) / q["fc"]
+            dz = [u * sgn(r) * abs(r) ** own["dahl_alpha"]]
+        else:
+            s = stribeck(u, q)
+            dz = [u if modes[i] == 0 else own["C"] / k[i] * (modes[i] * a[i] - k[i] * z[i] / s)
+                  for i in range(n)]
+        F = force(u, z)
+        return [v_ref - v, e - F, *dz, F]
+
+    def events():
+        out = []
+
+        def reversal(t, y):
+            return u_of(t, y)
+        out.append(reversal)
+        if law == "dahl":
+            def r_zero(t, y):
+                u = u_of(t, y)
+                return 1.0 - q["sigma0"] * y[2] * sgn(u) / q["fc"]
+            out.append(r_zero)
+        else:
+            for i in range(n):
+                def slip(t, y, i=i):
+                    if modes[i] != 0:
+                        return 1.0
+                    return a[i] * stribeck(u_of(t, y), q) - abs(k[i] * y[2 + i])
+                out.append(slip)
+        for ev in out:
+            ev.terminal = True
+        return out
+
+    def update(t, y):
+        u = u_of(t, y)
+        s = stribeck(u, q)
+        for i in range(n):
+            Fi = k[i] * y[2 + i]
+            if modes[i] == 0:
+                if Fi * u > 0 and abs(Fi) >= (1 - 1e-12) * a[i] * s:
+                    modes[i] = sgn(u)
+            elif modes[i] * u < 0:
+                modes[i] = 0.0
+
+    y = np.zeros(3 + n)
+    t = 0.0
+    x_tr = q_tr = None
+    stops = 0
+    while t < t_end:
+        t_stop = t_tr if x_tr is None else t_end
+        sol = solve_ivp(rhs, (t, t_stop), y, method="DOP853", rtol=rtol, atol=rtol,
+                        events=events())
+        # step past an event at the very start (the function is exactly 0 there)
+        if sol.status == 1 and sol.t[-1] - t < 1e-13 * max(1.0, t):
+            sol = solve_ivp(rhs, (t, min(t + 1e-9, t_stop)), y, method="DOP853", rtol=rtol,
+                            atol=rtol)
+        t, y = float(sol.t[-1]), sol.y[:, -1].copy()
+        if law == "gms":
+            update(t, y)
+        stops += 1
+        if x_tr is None and t >= t_tr:
+            x_tr, q_tr = v_ref * t - y[0], y[-1]
+    span = t_end - t_tr
+    return {"v_mean": (v_ref * t_end - y[0] - x_tr) / span, "F_mean": (y[-1] - q_tr) / span,
+            "e_end": float(y[0]), "v_end": float(y[1]), "stops": stops}
+
+
+def main():
+    refs = {}
+    for name, (law, own, point, window) in CASES.items():
+        r = run(law, own, point, window)
+        r9 = run(law, own, point, window, rtol=1e-9)
+        r["self_check"] = max(abs(r[o] - r9[o]) for o in ("v_mean", "F_mean"))
+        refs[name] = {"law": law, "own": own, "point": point, "window": window,
+                      "shared": SHARED, **r}
+        print(f"{name:16s} v_mean {r['v_mean']:.12f}  F_mean {r['F_mean']:.12f}  "
+              f"stops {r['stops']}  self_check {r['self_check']:.1e}")
+    OUT.write_text(json.dumps(refs, indent=1) + "\n")
+    print(f"wrote {OUT}")
+
+
+if __name__ == "__main__":
+    main()

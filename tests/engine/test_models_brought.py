@@ -1,0 +1,152 @@
+"""A friction law a user brings by import path (issue 35): the worked example of docs/MODELS.md
+runs like a built-in law, its source is in the sweep id, and bad user code is one line.
+
+The example (docs/examples/mylab/laws.py, a GMS written as a user would) must give the
+built-in GMS's numbers (same equations: within 1e-9); each bad module gives one line naming
+what is wrong, no traceback, through the same spec loading that ``ditherlab plan`` and
+``submit`` use (tests/e2e of the CLI: test_models_cli.py).
+"""
+from __future__ import annotations
+
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from engine import Scene, Settings, registry, simulate
+from sweeps.spec import SpecError, load_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "docs" / "examples"
+GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
+
+
+@pytest.fixture
+def examples_on_path(monkeypatch):
+    monkeypatch.syspath_prepend(str(EXAMPLES))
+
+
+def test_the_worked_example_gives_the_builtin_gms_numbers(examples_on_path):
+    kw = dict(W=0.3, omega=20.0, v_ref=0.1, t_end=8.0, t_transient=2.0)
+    outs = ("v_mean", "F_mean", "stick_fraction", "slip_fraction")
+    got = {}
+    for ref in ("gms", "mylab.laws:MaxwellSlip"):
+        p = registry.pack(ref, "slider", GMS, **kw)
+        scene = Scene.from_params(p, friction=ref, dither="sine-velocity", outputs=outs,
+                                  sizes=registry.sizes_of(ref, "slider", GMS))
+        r = simulate(scene, p, Settings(rtol=1e-10, atol=1e-13))
+        assert r.status == 0
+        got[ref] = r.outputs
+    for o in outs:
+        assert got["mylab.laws:MaxwellSlip"][o] == pytest.approx(got["gms"][o], rel=1e-9,
+                                                                 abs=1e-9), o
+
+
+def test_a_spec_names_the_example_and_its_source_is_in_the_sweep_id(tmp_path, monkeypatch):
+    pkg = tmp_path / "lab"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("")
+    source = (EXAMPLES / "mylab" / "laws.py").read_text()
+    (pkg / "laws.py").write_text(source)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = {"friction": "lab.laws:MaxwellSlip", "dither": "sine-velocity",
+            "outputs": ["v_mean"], "accuracy": "draft", "time": {"t_end": 2.0, "t_transient": 1.0},
+            "params": {"gms": GMS}, "grid": {"W": [0.1, 0.2]}}
+    first = load_spec(spec).sweep_id
+    assert load_spec(spec).sweep_id == first
+    (pkg / "laws.py").write_text(source + "\n# an edit\n")
+    registry.resolve.cache_clear()
+    assert load_spec(spec).sweep_id != first
+
+
+BAD = {
+    # name: (module source, friction ref suffix, params, what the line must say)
+    "syntax": ("class X(:\n", "X", {}, "SyntaxError"),
+    "raises-on-import": ("1 / 0\n", "X", {}, "ZeroDivisionError"),
+    "misspelt": ("from engine.contract import FrictionLaw\nclass Dahl2(FrictionLaw):\n"
+                 "    name = 'd'\n", "Dahl3", {}, "has no 'Dahl3' (did you mean 'Dahl2'?)"),
+    "not-a-law": ("class X:\n    pass\n", "X", {}, "not a subclass of engine.contract.FrictionLaw"),
+    "constructor": ("from engine.contract import FrictionLaw\nclass X(FrictionLaw):\n"
+                    "    name = 'x'\n    def __init__(self):\n        raise RuntimeError('no')\n",
+                    "X", {}, "X() failed: RuntimeError: no"),
+    "bad-params": ("from engine.contract import FrictionLaw\nclass X(FrictionLaw):\n"
+                   "    name = 'x'\n    params = {'a': 1.0}\n", "X", {},
+                   "params must be a dict of engine.contract.Param"),
+    "bad-name": ("from engine.contract import FrictionLaw\nclass X(FrictionLaw):\n"
+                 "    name = 'my law'\n", "X", {}, "its name must be an identifier"),
+}
+_LAW = '''
+from engine.contract import FrictionLaw, LawKernels, Param
+
+class X(FrictionLaw):
+    name = "x"
+    params = {{"a": Param(1.0, "1", "a number", lo=0.0, hi=2.0)}}
+
+    def n_states(self, size):
+        return {n}
+
+    def build(self, b):
+        Z, ia = b.z0, b.ix["a"]
+
+        @b.jit(inline="always")
+        def rates(u, y, dy, hold, p):
+{rates}
+
+        @b.jit(inline="always")
+        def force(u, y, hold, p):
+            return p[ia] * y[Z], 1.0
+
+        @b.jit(inline="always")
+        def init(p, y):
+            y[Z] = 0.0
+
+        @b.jit(inline="always")
+        def scales(p, out):
+            out[Z] = 1.0
+
+        return LawKernels(rates, force, 0, None, init, scales)
+'''
+_GOOD_RATES = "            dy[Z] = u - y[Z]\n            return p[ia] * y[Z]"
+
+
+def _law(n=1, rates=_GOOD_RATES):
+    return _LAW.format(n=n, rates=rates)
+
+
+BAD.update({
+    "too-many-writes": (_law(n=1, rates="            dy[Z] = u\n            dy[Z + 1] = u\n"
+                                        "            dy[Z + 2] = u\n            return y[Z]"),
+                        "X", {}, "writes beyond the"),
+    "too-few-states-written": (_law(n=2), "X", {}, "gives no rate for state 3"),
+    "numba-cannot-compile": (_law(rates="            dy[Z] = u\n            return {'a': u}"),
+                             "X", {}, "numba cannot compile"),
+    "nan-at-first-step": (_law(rates="            dy[Z] = u\n            return math.nan"
+                               ).replace("from engine", "import math\nfrom engine"),
+                          "X", {}, "NaN or infinite at the first step"),
+    "inf-rate": (_law(rates="            dy[Z] = math.inf\n            return 0.0"
+                      ).replace("from engine", "import math\nfrom engine"),
+                 "X", {}, "NaN or infinite at the first step"),
+    "unknown-parameter": (_law(), "X", {"b": 1.0}, "unknown parameter 'b'"),
+    "out-of-range-parameter": (_law(), "X", {"a": 3.0}, "params.a: 3.0 is outside the allowed range [0, 2]"),
+    "missing-ix": (_law().replace('b.ix["a"]', 'b.ix["nope"]'), "X", {},
+                   "KeyError while building"),
+})
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_user_code_is_one_line(case, tmp_path, monkeypatch):
+    source, attr, params, says = BAD[case]
+    name = f"badlaw_{case.replace('-', '_')}"
+    (tmp_path / f"{name}.py").write_text(textwrap.dedent(source))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = {"friction": f"{name}:{attr}", "dither": "none", "outputs": ["v_mean"],
+            "time": {"t_end": 2.0, "t_transient": 1.0}, "params": params}
+    with pytest.raises(SpecError) as err:
+        load_spec(spec)
+    text = str(err.value)
+    lines = [ln for ln in text.splitlines() if ln.strip().startswith("- ")]
+    assert len(lines) == 1, text
+    assert says in lines[0], text
+    assert "Traceback" not in text
+    sys.modules.pop(name, None)
