@@ -83,10 +83,17 @@ class Catalogue(LeaseMixin):
         (writes go to the copy). Default: when the store folder exists but is not
         writable (a read-only mount), so ``status``, ``query`` and ``map`` work there.
         A damaged catalogue raises ``store.errors.StoreError`` saying what to do.
+    clock
+        What the catalogue reads the time from for the times it writes (``created``,
+        ``updated``, ``queued_at``): a callable returning a timezone-aware ``datetime``;
+        default the wall clock. Tests inject a clock that ticks, instead of sleeping
+        until two milliseconds differ.
     """
 
-    def __init__(self, store_root, timeout_s: float = 30.0, readonly: bool | None = None):
+    def __init__(self, store_root, timeout_s: float = 30.0, readonly: bool | None = None,
+                 clock=None):
         self.root = Path(store_root)
+        self.clock = clock   # of the times it writes (catalogue_db.utc_now)
         self.path = self.root / CATALOGUE_NAME
         self.timeout_s = float(timeout_s)
         self._con: sqlite3.Connection | None = None
@@ -168,7 +175,7 @@ class Catalogue(LeaseMixin):
         (the same spec submitted under another name: a name is not part of a sweep's
         identity) and still finds the sweep. Returns the row.
         """
-        now = utc_now()
+        now = utc_now(self.clock)
         row = dict(
             sweep_id=str(sweep_id),
             name=str(name),
@@ -207,7 +214,7 @@ class Catalogue(LeaseMixin):
                     "cancel_requested", "run_start_blocks"):
             if key in fields:
                 fields[key] = check_count(key, fields[key])
-        fields["updated"] = utc_now()
+        fields["updated"] = utc_now(self.clock)
         assignments = ", ".join(f"{k} = :{k}" for k in fields)
         with self._connection() as con:
             cur = con.execute(

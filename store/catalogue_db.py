@@ -74,8 +74,11 @@ VALUES (:sweep_id, :name, :state, :spec_json, :n_points, :n_blocks, :done_points
 ON CONFLICT(sweep_id) DO NOTHING"""
 
 
-def utc_now() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="milliseconds")
+def utc_now(clock=None) -> str:
+    """Now as the catalogue writes times: ISO 8601 with milliseconds, UTC. ``clock``: a
+    callable returning a timezone-aware ``datetime`` (the catalogue's, tests inject one);
+    default the wall clock."""
+    return (clock() if clock else datetime.now(timezone.utc)).isoformat(timespec="milliseconds")
 
 
 def check_readable(con: sqlite3.Connection, path: Path) -> None:

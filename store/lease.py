@@ -92,9 +92,8 @@ class LeaseMixin:
             raise LookupError(f"no sweep with id {sweep_id!r}; register it first")
         return dict(row)
 
-    @staticmethod
-    def _set(con, sweep_id: str, **fields) -> None:
-        fields["updated"] = utc_now()
+    def _set(self, con, sweep_id: str, **fields) -> None:
+        fields["updated"] = utc_now(self.clock)
         assignments = ", ".join(f"{k} = :{k}" for k in fields)
         con.execute(f"UPDATE sweeps SET {assignments} WHERE sweep_id = :_id",
                     {**fields, "_id": sweep_id})
@@ -187,7 +186,7 @@ class LeaseMixin:
                 return row
             if row["state"] != "queued":
                 self._set(con, sweep_id, state="queued", owner="", heartbeat=0.0, message="",
-                          cancel_requested=0, queued_at=utc_now())
+                          cancel_requested=0, queued_at=utc_now(self.clock))
             return self._row(con, sweep_id)
 
     def requeue(self, sweep_id: str, owner: str, message: str = "", **counts) -> bool:
@@ -227,7 +226,7 @@ class LeaseMixin:
                 "VALUES (?, ?, ?, ?, ?) ON CONFLICT(owner) DO UPDATE SET "
                 "heartbeat = excluded.heartbeat, sweep_id = excluded.sweep_id, "
                 "cluster = excluded.cluster",
-                (owner or owner_tag(), utc_now(), time.time(), sweep_id, cluster))
+                (owner or owner_tag(), utc_now(self.clock), time.time(), sweep_id, cluster))
 
     def server_gone(self, owner: str | None = None) -> None:
         with self._connection() as con:

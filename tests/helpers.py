@@ -1,7 +1,8 @@
 """What tests of every folder share: the ``ditherlab`` command (:data:`BIN`, :func:`ditherlab`),
-the command line run in this process (:func:`in_process`), and the one wait loop
+the command line run in this process (:func:`in_process`), the one wait loop
 (:func:`wait_for`): a condition polled until it holds, a deadline that fails the test with
-what was awaited, and the process the test depends on checked alive on every poll."""
+what was awaited, and the process the test depends on checked alive on every poll; and a
+clock that ticks (:func:`ticking_clock`) for code that takes one, instead of sleeps."""
 from __future__ import annotations
 
 import contextlib
@@ -10,6 +11,7 @@ import os
 import subprocess
 import sys
 import time
+from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 BIN = Path(sys.executable).parent / "ditherlab"
@@ -54,3 +56,15 @@ def wait_for(condition, what: str, seconds: float = 600, poll: float = 0.2, proc
         if time.monotonic() - t0 > seconds:
             raise AssertionError(f"timed out after {seconds:.0f} s waiting for {what}")
         time.sleep(poll)
+
+
+def ticking_clock(step=timedelta(milliseconds=1)):
+    """A clock (a callable returning a UTC ``datetime``) that moves ``step`` forward at
+    every reading: the times a catalogue writes are distinct and ordered as the calls."""
+    now = [datetime(2026, 1, 1, tzinfo=timezone.utc)]
+
+    def clock() -> datetime:
+        now[0] += step
+        return now[0]
+
+    return clock

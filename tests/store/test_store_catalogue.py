@@ -5,7 +5,6 @@ import os
 import sqlite3
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -13,6 +12,7 @@ import pytest
 from storetest_cubes import make_cube
 
 import store
+from tests.helpers import ticking_clock
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -49,10 +49,9 @@ def test_register_update_get(tmp_path):
 
 
 def test_find_by_id_name_and_prefix(tmp_path):
-    cat = store.Catalogue(tmp_path)
+    cat = store.Catalogue(tmp_path, clock=ticking_clock())
     cat.register("aaaa1111", "demo", "{}", 1, 1, "x")
-    time.sleep(0.01)
-    cat.register("aaaa2222", "demo", "{}", 1, 1, "y")  # same name, newer
+    cat.register("aaaa2222", "demo", "{}", 1, 1, "y")  # same name, a millisecond newer
     cat.register("bbbb3333", "other", "{}", 1, 1, "z")
     assert cat.find("aaaa1111")["sweep_id"] == "aaaa1111"
     assert cat.find("bbb")["sweep_id"] == "bbbb3333"

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 import store
+from tests.helpers import ticking_clock
 from store.catalogue import Catalogue
 from store.lease import STALE_S, STALLED, owner_tag
 
@@ -136,11 +137,10 @@ while True:
 
 
 def test_two_servers_never_claim_the_same_sweep_and_oldest_goes_first(tmp_path):
-    cat = Catalogue(tmp_path)
+    cat = Catalogue(tmp_path, clock=ticking_clock())   # distinct queue times, in order
     ids = [f"q{i:02d}" for i in range(40)]
     for sid in ids:
         cat.register(sid, sid, "{}", 1, 1, tmp_path / sid)
-        time.sleep(0.002)   # distinct queue times
     procs = [subprocess.Popen([sys.executable, "-c", CLAIMER.format(root=str(ROOT)),
                                str(tmp_path), str(i)], stdin=subprocess.PIPE,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
