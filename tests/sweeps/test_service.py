@@ -405,7 +405,11 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
     submits no further block and does not overwrite the new holder's row."""
     import sweeps.workers.task as T
     from sweeps import parse_spec, submit
+    from sweeps.run.lease_holder import CANCEL_POLL_S
 
+    # each block outlasts the runner's poll of its lease (at most every CANCEL_POLL_S): the
+    # takeover during block 3 is seen before block 4 is submitted
+    block_s = CANCEL_POLL_S + 0.05
     plan = make_plan(parse_spec(SMALL_AVG))
     root = tmp_path / "store"
     calls = []
@@ -415,7 +419,7 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
         if len(calls) == 3:   # someone else now holds the sweep
             store.Catalogue(root).update(plan.sweep_id, owner="elsewhere:1",
                                          heartbeat=time.time())
-        time.sleep(0.3)
+        time.sleep(block_s)
         return REAL_COMPUTE_BLOCK(scene, points, p, settings, index)
 
     monkeypatch.setattr(T, "compute_block", slow)
