@@ -15,7 +15,8 @@ from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
-from ..planning.plan import Plan
+from ..workers.block_gate import RERUN_GATE_ENV
+from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
 
@@ -43,9 +44,13 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
 
 class SampleRuns:
     """The error sample's re-runs one accuracy level finer, one task per point
-    (error_estimate.py), costliest first, submitted one by one: a refined sweep hands them
-    to the dispatch as filler for the workers idling at the tail of each level (its
-    sample is known before its first level ends: error_estimate.sample)."""
+    (error_estimate.py), costliest first, submitted one by one. The sample is drawn from
+    the sweep id, so it is known when the plan is made: an exhaustive sweep's dispatch
+    runs the re-runs among its blocks, longest expected first (:meth:`next_cost`), and a
+    refined sweep hands them to the dispatch as filler for the workers idling at the tail
+    of each level (error_estimate.sample).
+
+    ``client`` is a dask client or a :class:`sweeps.workers.threads.ThreadClient`."""
 
     def __init__(self, plan: Plan):
         self.plan, self.finer = plan, errest.finer_numerics(plan)
@@ -53,10 +58,20 @@ class SampleRuns:
         self.scene = plan.scene.with_(integrator=self.finer.integrator)
         cost = plan.costs_at(self.index)
         self.order = np.argsort(-cost, kind="stable")
+        # expected seconds of each re-run, in submission order (sweeps.planning.plan.work_s)
+        self.costs = [work_s(plan, self.index[i:i + 1], self.finer) for i in self.order]
         self.futures: dict[int, object] = {}
 
     def running(self) -> int:
         return sum(not f.done() for f in self.futures.values())
+
+    def finished(self) -> int:
+        return sum(f.done() for f in self.futures.values())
+
+    def next_cost(self) -> float | None:
+        """Expected seconds of the next re-run to submit; None when all are submitted."""
+        k = len(self.futures)
+        return self.costs[k] if k < len(self.order) else None
 
     def submit_next(self, client) -> bool:
         """Submit the next re-run; False when all are submitted."""
@@ -65,18 +80,23 @@ class SampleRuns:
         i = int(self.order[len(self.futures)])
         self.futures[i] = client.submit(task.compute_block, self.scene,
                                         self.points[i:i + 1], self.plan.params,
-                                        self.finer.settings, self.index[i:i + 1], pure=False)
+                                        self.finer.settings, self.index[i:i + 1],
+                                        gate=RERUN_GATE_ENV, pure=False)
         return True
 
     def gather(self, client, tick=None) -> BlockRecord:
         """Every re-run's result, in sample order, as one record (the rest submitted
         now); ``tick()`` once per re-run as it finishes."""
-        from distributed import as_completed
-
         while self.submit_next(client):
             pass
         futures = [self.futures[i] for i in range(len(self.order))]
-        for _ in as_completed(futures, loop=client.loop):
+        if hasattr(client, "as_completed"):   # a ThreadClient
+            finishing = client.as_completed(futures)
+        else:
+            from distributed import as_completed
+
+            finishing = as_completed(futures, loop=client.loop)
+        for _ in finishing:
             if tick is not None:
                 tick()
         return BlockRecord.concatenate(client.gather(futures))
@@ -91,11 +111,18 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
     ``started``) and compare."""
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
-    if display is None:
+    done, total = runs.finished(), len(runs.order)
+    if display is None or done == total:   # (re-runs among the blocks: all finished)
         result = runs.gather(client)
-    else:
-        with display("error estimate", len(runs.order), "re-run") as bar:
-            result = runs.gather(client, tick=bar.update)
+    else:   # the re-runs still running after the last point, counted from those done
+        with display("error estimate", total, "re-run", initial=done) as bar:
+            ticks = iter(range(total))
+
+            def tick() -> None:   # as_completed yields the finished ones too: skip them
+                if next(ticks) >= done:
+                    bar.update()
+
+            result = runs.gather(client, tick=tick)
     return errest.compare(plan, cube, index, result, finer.label)
 
 

@@ -37,6 +37,8 @@ BLOCK_POINTS = {"simulate": (16, 256), "averaged": (4096, 65536), "hbm": (8, 64)
 # block costs ~7 ms of bookkeeping).
 OMEGA_FLOOR = 50.0
 SECONDS_PER_RADIAN = 1e-5
+STANDARD_RTOL = 1e-8       # the standard level's DP5 tolerance, SECONDS_PER_RADIAN's level
+ANALYSIS_POINT_S = 2e-6    # an averaged or harmonic-balance point (bench_analysis: 1-5 us)
 BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
 # Tasks per second one submitting process hands out and takes back: dask's scheduler and
@@ -160,6 +162,31 @@ def point_costs(spec: Spec, coords: dict[str, np.ndarray],
     if index is None:
         return np.broadcast_to(omega[None, :, None, None], shape).ravel()
     return omega[np.unravel_index(np.asarray(index, np.int64), shape)[1]]
+
+
+def level_price(num: Numerics) -> float:
+    """A level's price relative to ``standard`` (SECONDS_PER_RADIAN): an adaptive method's
+    steps grow about as rtol^(-1/10) here (measured on this machine's 2-core AMD EPYC: a
+    draft point cost 0.45-0.55x a standard one, LuGre with and without dither); a
+    fixed step is priced as standard."""
+    rtol = getattr(num.settings, "rtol", 0.0)
+    if num.integrator == "rk4" or not rtol > 0:
+        return 1.0
+    return (rtol / STANDARD_RTOL) ** -0.1
+
+
+def work_s(plan: Plan, index: np.ndarray, num: Numerics | None = None) -> float:
+    """Rough serial seconds of the points at flat indices ``index`` at ``num`` (the plan's
+    own numerics by default): their relative costs x t_end x SECONDS_PER_RADIAN x the
+    level's price. Fitted to Fig. 14 (standard); it over-prices dithered LuGre points by
+    20-45x and prices undithered ones about right (1 ms a draft point of 100 tau), so it
+    errs towards a cluster. The analysis paths are priced at ANALYSIS_POINT_S a point."""
+    index = np.asarray(index, np.int64)
+    if plan.path != "simulate":
+        return ANALYSIS_POINT_S * index.size
+    num = num or plan.numerics
+    t_end = float(plan.params[P.T_END])
+    return float(plan.costs_at(index).sum()) * t_end * SECONDS_PER_RADIAN * level_price(num)
 
 
 def make_plan(spec: Spec, level: str | None = None) -> Plan:

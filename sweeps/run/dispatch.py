@@ -6,6 +6,7 @@ analysis paths, which cost microseconds per point, in this process (:func:`run_b
 Finished blocks go to a :class:`sweeps.run.sink.BlockSink`, which also says when to stop."""
 from __future__ import annotations
 
+import sys
 import threading
 import time
 from contextlib import nullcontext
@@ -13,9 +14,10 @@ from contextlib import nullcontext
 import numpy as np
 
 from ..workers import task
-from ..workers.cluster import dask_client
+from ..workers.cluster import NOTICE_AFTER_S, dask_client
 from ..workers.matching import matched
-from ..planning.plan import Plan, blocks_per_task
+from ..workers.threads import ThreadClient
+from ..planning.plan import Plan, blocks_per_task, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import interrupt, phases
 from .sink import BlockSink
@@ -26,12 +28,14 @@ TICK_S = 0.02      # how often it looks for finished blocks
 
 def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
                progress, timings, client=None, dashboard=None, filler=None,
-               warm_up: bool = True) -> None:
-    """Compute ``todo`` on the cluster. ``filler`` (e.g. a refined sweep's error sample,
-    sweeps.estimates.error_reruns.SampleRuns) gives tasks to run where a worker would otherwise
-    idle: once no block is left to submit, while fewer tasks than threads are running.
-    ``warm_up=False`` skips compiling the kernel on the workers (done by an earlier call on
-    the same client: ``client.run`` would wait for the filler tasks still running)."""
+               warm_up: bool = True, sample=None) -> None:
+    """Compute ``todo`` on the cluster. ``sample`` (sweeps.estimates.error_reruns.SampleRuns):
+    the error estimate's re-runs, dispatched among the blocks, longest expected first, and
+    gathered once the blocks are done. ``filler`` (a refined sweep's error sample) gives
+    tasks to run where a worker would otherwise idle: once no block is left to submit,
+    while fewer tasks than threads are running. ``warm_up=False`` skips compiling the
+    kernel on the workers (done by an earlier call on the same client: ``client.run``
+    would wait for the filler tasks still running)."""
     bar = _progress_bar(plan, todo, progress)
     t = time.perf_counter()
     with (nullcontext(client) if client is not None
@@ -47,13 +51,21 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
         t = time.perf_counter()
         if warm:
             sink.started()
-            _dispatch(client, plan, todo, sink, bar, filler)
+            _dispatch(client, plan, todo, sink, bar, filler, sample)
         timings["compute_s"] = time.perf_counter() - t
         bar.close()   # the points are done: say so before the next phase
-        if needs_estimate(plan, sink.sweep, sink.cube) or \
-                (todo and plan.path == "simulate" and complete(sink.cube)):
-            estimate_into(plan, client, sink.cube, sink.sweep, timings,
-                          display=phases.display(plan, progress))
+        _estimate(plan, client, todo, sink, timings, sample, progress)
+
+
+def _estimate(plan: Plan, client, todo, sink: BlockSink, timings, sample, progress) -> None:
+    """The error estimate once the points are done (its re-runs ``sample``, if given,
+    already dispatched among the blocks); a stopped run's re-runs are cancelled."""
+    if sink.stopped is None and (needs_estimate(plan, sink.sweep, sink.cube) or
+                                 (todo and plan.path == "simulate" and complete(sink.cube))):
+        estimate_into(plan, client, sink.cube, sink.sweep, timings, started=sample,
+                      display=phases.display(plan, progress))
+    elif sample is not None:
+        sample.cancel(client)
 
 
 def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
@@ -80,12 +92,14 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
 
 
 def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
-              filler=None) -> None:
+              filler=None, sample=None) -> None:
     """Keep one task per matching worker thread (plus one) in flight, the next submitted
     as one finishes; once ``sink.should_stop()``, submit no more and collect those in
     flight (a stop loses no finished work and waits for at most one task per worker). A
     task computes ``blocks_per_task`` blocks (by the mean block's measured seconds: one
-    until blocks are back), journaled as blocks.
+    until blocks are back), journaled as blocks. Blocks go longest expected first, and
+    the error sample's re-runs (``sample``) among them by the same expected cost
+    (:func:`longest_first`).
 
     Every REFRESH_S the workers are looked at again (``client`` is a
     :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
@@ -93,8 +107,10 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     fewer blocks are left than workers (``client.scaler``)."""
     from distributed import as_completed
 
-    queue = list(reversed(todo))
+    cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
+    queue = list(reversed(longest_first(todo, cost_of)))   # popped from the end
     inflight: dict = {}        # future -> (its blocks, the workers it may run on)
+    shown = [-1]               # re-runs finished, as last shown on the bar
     cost = [0.0, 0]            # seconds computed, blocks back: the mean block's seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
     # event loop as each block finishes: one f.result() per block costs a round trip to that
@@ -104,7 +120,14 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
 
     def fill() -> None:
         window, groups = sum(good.values()) + 1, []
-        while queue and good and len(inflight) + len(groups) < window:
+        reruns = sample.running() if sample is not None else 0
+        while good and len(inflight) + len(groups) + reruns < window:
+            if rerun_first(sample, queue, cost_of):
+                sample.submit_next(client)
+                reruns += 1
+                continue
+            if not queue:
+                break
             k = blocks_per_task(window - 1, cost[0] / max(cost[1], 1), len(queue))
             groups.append([queue.pop() for _ in range(min(k, len(queue)))])
         if groups:   # one message to the scheduler for them all: a submit each costs
@@ -136,6 +159,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             fill()
         if not inflight and (stopping or not queue):
             break
+        show_reruns(bar, sample, shown)
         if not done.has_ready():
             time.sleep(TICK_S)
             continue
@@ -149,6 +173,27 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 cost[1] += len(group)
         sink.many(finished)   # journaled as one group
         bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+
+
+def longest_first(todo: list[int], cost_of: dict) -> list[int]:
+    """``todo`` by expected cost, longest first (ties in their order): the work that would
+    otherwise be a lone worker's tail starts early (LPT scheduling)."""
+    return sorted(todo, key=lambda b: -cost_of[b])
+
+
+def rerun_first(sample, queue: list[int], cost_of: dict) -> bool:
+    """True when the next task should be the error sample's next re-run: one is left and
+    it is expected to take at least as long as the next block (``queue[-1]``), or no block
+    is left."""
+    nxt = sample.next_cost() if sample is not None else None
+    return nxt is not None and (not queue or nxt >= cost_of[queue[-1]])
+
+
+def show_reruns(bar, sample, shown: list[int]) -> None:
+    """The re-runs finished so far, beside the points (``error estimate k/N``)."""
+    if sample is not None and (k := sample.finished()) != shown[0]:
+        shown[0] = k
+        bar.set_postfix_str(f"error estimate {k}/{len(sample.order)}")
 
 
 def split_result(record, group: list[int], sizes: list[int]) -> list[tuple[int, object]]:
@@ -167,21 +212,86 @@ def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
             queue.extend(blocks)
 
 
-def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
-                     progress, timings, client=None, dashboard=None) -> None:
-    """The analysis paths cost microseconds per point: starting a cluster would cost
-    more than the whole sweep, so they run in this process."""
+def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=None,
+                     workers=2, progress, timings, client=None, dashboard=None,
+                     sample=None, warm_up: bool = True) -> None:
+    """Compute ``todo`` on ``workers`` threads of this process: the analysis paths (they
+    cost microseconds per point), and a simulated sweep whose estimated work is below the
+    cost of starting a cluster (sweeps.run.submit.small). The same task, journal and
+    checks as on a cluster, the same longest-first order, the error sample's re-runs
+    (``sample``) among the blocks; the kernel is compiled once first (``warm_up``)."""
     bar = _progress_bar(plan, todo, progress)
-    t = time.perf_counter()
-    sink.started()
-    for b in todo:
-        if sink.should_stop():
+    threads = workers if isinstance(workers, int) else 2
+    with ThreadClient(threads) as pool:
+        if plan.path == "simulate" and warm_up:
+            t = time.perf_counter()
+            if not _warm_up_here(plan, sink, progress):
+                bar.close()
+                return
+            timings["warm_up_s"] = time.perf_counter() - t
+        t = time.perf_counter()
+        sink.started()
+        _dispatch_local(pool, plan, todo, sink, bar, sample)
+        timings["compute_s"] = time.perf_counter() - t
+        bar.close()
+        if plan.path == "simulate":
+            _estimate(plan, pool, todo, sink, timings, sample, progress)
+
+
+def _warm_up_here(plan: Plan, sink: BlockSink, progress: bool) -> bool:
+    """Compile the kernel in this process, on a daemon thread (a Ctrl-C or a cancel during
+    a first compilation, which cannot be interrupted, leaves it behind instead of waiting
+    for it), saying so after NOTICE_AFTER_S; False if ``sink.should_stop()`` turned true
+    meanwhile."""
+    thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-compile",
+                              args=(plan.scene, plan.params, plan.numerics.settings))
+    thread.start()
+    t0 = time.monotonic()
+    while thread.is_alive():
+        thread.join(0.1)
+        interrupt.check()
+        if thread.is_alive() and sink.should_stop():
+            return False
+        if progress and t0 is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
+            print("ditherlab: compiling the engine for this scene (its first run here; "
+                  "cached for later runs)", file=sys.stderr, flush=True)
+            t0 = None
+    return True
+
+
+def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
+                    sample=None) -> None:
+    """:func:`_dispatch` on threads: one task per thread (plus one) in flight, longest
+    expected first, the re-runs among the blocks; each finished block journaled."""
+    cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
+    queue = list(reversed(longest_first(todo, cost_of)))
+    inflight: dict = {}   # future -> block
+    shown = [-1]
+    window = pool.threads + 1
+    while True:
+        interrupt.check()
+        stopping = sink.should_stop()
+        reruns = [f for f in (sample.futures.values() if sample is not None else ())
+                  if not f.done()]
+        while not stopping and len(inflight) + len(reruns) < window:
+            if rerun_first(sample, queue, cost_of):
+                sample.submit_next(pool)
+                reruns.append(None)
+                continue
+            if not queue:
+                break
+            b = queue.pop()
+            inflight[pool.submit(task.compute_block, plan.scene, plan.block_points(b),
+                                 plan.params, plan.numerics.settings, plan.blocks[b])] = b
+        if not inflight and (stopping or not queue):
             break
-        sink(b, task.compute_block(plan.scene, plan.block_points(b), plan.params,
-                                   plan.numerics.settings, plan.blocks[b]))
-        bar.update(len(plan.blocks[b]))
-    timings["compute_s"] = time.perf_counter() - t
-    bar.close()
+        running = [f for f in (sample.futures.values() if sample is not None else ())
+                   if not f.done()]
+        done = pool.wait_any([*inflight, *running], TICK_S * 5)
+        for b, record in [(inflight.pop(f), f.result()) for f in done if f in inflight]:
+            sink(b, record)   # a journal file each: few blocks here, and a block's file
+            bar.update(len(plan.blocks[b]))   # is what a repair sets aside
+        show_reruns(bar, sample, shown)
 
 
 def _progress_bar(plan: Plan, todo: list[int], enabled: bool):

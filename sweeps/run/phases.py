@@ -1,6 +1,7 @@
 """What a submitter shows while it works, phase by phase: the points (a tqdm bar per run of
-blocks), the error estimate's finer re-runs (``error estimate k/N``) and the cube's last
-publish. Each phase is named when it starts, so the display never sits at "99 %" while
+blocks, with the error estimate's finer re-runs that run among them counted beside:
+``error estimate k/N``), the re-runs still running after the last point (``error estimate
+k/N``, a bar of its own) and the cube's last publish. Each phase is named when it starts, so the display never sits at "99 %" while
 work it does not mention goes on (the estimate's re-runs took ~20 s on a 100-point draft
 Fig. 14 sweep, after the last point)."""
 from __future__ import annotations
@@ -10,22 +11,23 @@ import sys
 MININTERVAL_S = 0.5   # tqdm redraws at most this often (a phase change redraws at once)
 
 
-def bar(plan, phase: str, total: int, unit: str, enabled: bool):
-    """A tqdm bar ``<name> [<id>] <phase>: k/total``; a no-op bar when not ``enabled``."""
+def bar(plan, phase: str, total: int, unit: str, enabled: bool, initial: int = 0):
+    """A tqdm bar ``<name> [<id>] <phase>: k/total`` (from ``initial``); a no-op bar when
+    not ``enabled``."""
     from tqdm import tqdm
 
     # miniters=1: tqdm's adaptive miniters skipped the redraws of a run's last blocks (it
     # showed 84 % until the bar closed, 13 s later)
     return tqdm(total=total, unit=unit, desc=f"{plan.spec.name} [{plan.sweep_id}] {phase}",
-                disable=not enabled, mininterval=MININTERVAL_S, miniters=1)
+                disable=not enabled, mininterval=MININTERVAL_S, miniters=1, initial=initial)
 
 
 def display(plan, enabled: bool):
-    """``display(phase, total, unit) -> bar`` for a phase counted elsewhere (the error
-    estimate, sweeps.estimates), or None when progress is off."""
+    """``display(phase, total, unit, initial=0) -> bar`` for a phase counted elsewhere (the
+    error estimate, sweeps.estimates), or None when progress is off."""
     if not enabled:
         return None
-    return lambda phase, total, unit: bar(plan, phase, total, unit, True)
+    return lambda phase, total, unit, initial=0: bar(plan, phase, total, unit, True, initial)
 
 
 def say(plan, phase: str, enabled: bool) -> None:

@@ -37,13 +37,19 @@ from .dispatch import run_blocks, run_blocks_local
 from .lease_holder import LEASE_LOST, Lease
 from ..workers.matching import matched
 from .outcome import SubmitResult, abort, attached_result, final_result
-from ..planning.plan import Plan
+from ..planning.plan import Plan, work_s
 from .progress import attach
-from ..estimates.error_reruns import attach_saved_estimate, needs_estimate
+from ..estimates.error_reruns import (ESTIMATE_FILE, SampleRuns, attach_saved_estimate,
+                                      needs_estimate)
 from .sink import BlockSink
 from ..version import results_fingerprint
 
 log = logging.getLogger("ditherlab")
+
+# A local cluster's start, in seconds of its workers' time: two single-threaded workers
+# were up and warm 1.0 s after the submitter asked for them (issue 37, a quiet 2-core AMD
+# EPYC, kernel cache warm). A sweep expected to take less per worker runs on threads here.
+IN_PROCESS_BELOW_S = 1.0
 
 
 def blocks_to_run(plan: Plan, cube) -> list[int]:
@@ -108,14 +114,16 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         return attached_result(plan, sweep, attached, t0)
     sink, timings = None, {}
     # a local cluster starts (and compiles the kernel) while the cube is prepared below;
-    # not for a run that only republishes its cube
+    # not for a run that only republishes its cube, nor for a small one (on threads here)
     local = plan.path == "simulate" and client is None and scheduler is None
     client = matched(client)   # blocks go only to workers that run this engine
     if not isinstance(workers, int):   # batch jobs (sweeps.workers.batch): no more than blocks
         workers = workers.for_blocks(len(todo))
+    here = in_process(plan, scheduler) or (local and not dashboard and
+                                           small(plan, todo, workers))
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
-        if local and (todo or needs_estimate(plan, sweep, cube)) else None
+        if local and not here and (todo or needs_estimate(plan, sweep, cube)) else None
     if early is not None:
         phases.say(plan, f"starting a local cluster of {workers} workers", progress)
     try:
@@ -124,21 +132,26 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         cube = store.rebuild(empty_cube(plan), journal, _checked_blocks(plan))
         attach_saved_estimate(sweep, cube)
         todo = blocks_to_run(plan, cube)
-        if sweep.cube.exists() or not todo or not in_process(plan, scheduler):
+        if sweep.cube.exists() or not todo or not here:
             _republish(plan, sweep, cube, renamed)  # a valid cube, equal to the journal
         # (an in-process sweep with work to do and no cube yet, seconds of work, publishes
         # after PUBLISH_EVERY_S and at its end: a first publish was 0.13 s of a 1.7 s
         # averaged 400x400 chart)
+        whole = max_blocks is None or len(todo) <= max_blocks
         todo = todo[:max_blocks] if max_blocks is not None else todo
         sink = BlockSink(plan, cube, journal, sweep, lease)
-        run = run_blocks_local if in_process(plan, scheduler) else run_blocks
+        run = run_blocks_local if here else run_blocks
         if plan.spec.refine:
             from .refined import run
         if todo or needs_estimate(plan, sweep, cube):
             extra, t = {}, time.perf_counter()
+            if whole and todo and overlaps_estimate(plan, sweep):
+                # the error sample's re-runs among the blocks, longest first (its sample is
+                # drawn from the sweep id): no tail of re-runs after the last block
+                extra["sample"] = SampleRuns(plan)
             if early is not None:   # its workers are warm: the kernel compiled there
                 client = early.client(sink.should_stop, _compiling if progress else None)
-                extra = {"warm_up": False}
+                extra["warm_up"] = False
             waited = time.perf_counter() - t
             if early is None or client is not None:   # else stopped while it started
                 run(plan, todo, sink, scheduler=scheduler, workers=workers,
@@ -148,29 +161,58 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                 timings["cluster_s"] = waited
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
             phases.say(plan, "publishing the cube", progress)
+            t = time.perf_counter()
             store.publish(cube, sweep.cube)
-        if early is not None:
-            phases.say(plan, "stopping the local cluster", progress)
+            timings["publish_s"] = time.perf_counter() - t
     except BaseException as exc:
         abort(plan, sink, lease, exc, serving=stop is not None)
-        raise
-    finally:
         if early is not None:
             early.close()
-    if "compute_s" in timings and max_blocks is None and sink.stopped is None:
-        history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
-                              timings["compute_s"])
+        raise
+    try:
+        if "compute_s" in timings and max_blocks is None and sink.stopped is None:
+            history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
+                                  timings["compute_s"])
+        # the final state goes to the catalogue (the result is reported) before the
+        # cluster stops: nobody waits for the stop to learn the sweep is done
+        result = final_result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run,
+                              t0=t0, timings=timings, lease=lease, stopped=sink.stopped,
+                              max_blocks=max_blocks)
+    finally:
+        if early is not None:
+            phases.say(plan, "stopping the local cluster", progress)
+            t = time.perf_counter()
+            early.close()
+            timings["stop_s"] = time.perf_counter() - t
     log.debug("sweep %s timings: %s", plan.sweep_id,
               ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()) or "-")
-    return final_result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run, t0=t0,
-                        timings=timings, lease=lease, stopped=sink.stopped,
-                        max_blocks=max_blocks)
+    return result
 
 
 def in_process(plan: Plan, scheduler: str | None) -> bool:
     """The analysis paths cost microseconds a point: they run in this process, not on a
     cluster (sweeps.run.dispatch.run_blocks_local), unless a scheduler is named."""
     return plan.path != "simulate" and scheduler is None
+
+
+def small(plan: Plan, todo: list[int], workers) -> bool:
+    """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: its blocks
+    still to compute and the error sample's re-runs), spread over ``workers`` threads,
+    is below IN_PROCESS_BELOW_S, the cost of starting a local cluster: it runs on threads
+    of this process (sweeps.run.dispatch.run_blocks_local). Not a refined sweep (its later
+    levels are unknown) nor batch jobs."""
+    if not isinstance(workers, int) or plan.spec.refine:
+        return False
+    index = np.concatenate([plan.blocks[b] for b in todo]) if todo else np.arange(0)
+    work = work_s(plan, index) + sum(SampleRuns(plan).costs)
+    return work / max(workers, 1) < IN_PROCESS_BELOW_S
+
+
+def overlaps_estimate(plan: Plan, sweep) -> bool:
+    """An exhaustive simulated sweep without a saved error estimate: its re-runs are
+    dispatched with its blocks (a refined sweep gives them to its levels' tails)."""
+    return plan.path == "simulate" and not plan.spec.refine and \
+        not (sweep.root / ESTIMATE_FILE).exists()
 
 
 def _compiling() -> None:

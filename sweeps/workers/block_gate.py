@@ -19,6 +19,11 @@ import select
 import time
 
 GATE_ENV = "DITHERLAB_BLOCK_GATE"
+# The error estimate's re-runs (sweeps.estimates.error_reruns) are not blocks: they pass
+# $DITHERLAB_BLOCK_GATE freely (they run among the blocks, often first: a test that lets
+# three blocks through gets three blocks), and a gate of their own, the same kinds of file,
+# when $DITHERLAB_RERUN_GATE names one.
+RERUN_GATE_ENV = "DITHERLAB_RERUN_GATE"
 
 
 def pass_gate(path: str) -> None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import logging
 import os
 import time
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -27,13 +28,15 @@ BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed blo
 
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
-                  index: np.ndarray | None = None, sizes=None) -> BlockRecord:
+                  index: np.ndarray | None = None, sizes=None,
+                  gate: str = GATE_ENV) -> BlockRecord:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
     ``index``: the points' flat cube indices, carried into the record (default: their
     positions in ``points``); ``sizes``: the points of each of the plan's blocks that
     ``points`` holds one after another (a dask task may compute several:
     sweeps.planning.plan.blocks_per_task; default one block), each passing the test gate
-    and noted in the block log once. The record's ``fingerprint`` is the results fingerprint of
+    (``gate``: the variable naming it, sweeps.workers.block_gate) and noted in the block
+    log once. The record's ``fingerprint`` is the results fingerprint of
     the process that computed it (the submitter journals a block only under its own:
     sweeps.run.sink).
 
@@ -43,10 +46,12 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
     """
     from engine.batch import run_block
 
+    if scene not in _COMPILED:   # the first block of a scene in this process
+        warm_up(scene, p, settings)
     starts = np.cumsum([0, *(sizes or [len(points)])])
     for a, b in zip(starts[:-1], starts[1:]):   # per block
-        if os.environ.get(GATE_ENV):   # tests hold blocks back (sweeps.workers.block_gate)
-            pass_gate(os.environ[GATE_ENV])
+        if os.environ.get(gate):   # tests hold blocks back (sweeps.workers.block_gate)
+            pass_gate(os.environ[gate])
         if os.environ.get(BLOCK_LOG_ENV):
             _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points[a:b], settings))
     index = np.arange(len(points)) if index is None else index
@@ -101,7 +106,10 @@ def _note_block(path: str, key: str) -> None:
 
 
 def warm_up(scene, p: np.ndarray, settings) -> float:
-    """Compile the block kernel in this process (once per worker); returns seconds.
+    """Compile the block kernel of ``scene`` in this process; returns seconds. Once per
+    machine: the first process to need a scene compiles it into the kernel cache
+    (engine.jit) holding that scene's lock file there, and the others, waiting for the
+    lock, load it from the cache instead of compiling it again (:func:`compile_lock`).
     Calls the engine directly, not compute_block: no ``$DITHERLAB_BLOCK_LOG`` line."""
     from engine.batch import run_block
 
@@ -109,8 +117,40 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     q = p.copy()
     q[P.T_END] = min(q[P.T_END], 1e-3)
     q[P.T_TRANSIENT] = 0.0
-    try:
-        run_block(scene, np.array([[0.1, 1000.0, 0.1, 0.1]]), q, settings)
-    except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it (compute_block)
-        log.debug("warm-up failed: %s", exc)
+    with compile_lock(scene):
+        try:
+            run_block(scene, np.array([[0.1, 1000.0, 0.1, 0.1]]), q, settings)
+        except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it
+            log.debug("warm-up failed: %s", exc)
+    _COMPILED.add(scene)
     return time.perf_counter() - t0
+
+
+_COMPILED: set = set()   # scenes whose kernel this process has (compiled or loaded)
+
+
+@contextmanager
+def compile_lock(scene):
+    """Held while this process compiles or loads ``scene``'s kernel: an exclusive
+    ``flock`` on ``<kernel cache>/compiling/<scene hash>.lock``, so that the workers of
+    one machine compile a scene once, not once each (the others wait, then find it in
+    the cache). Released by the kernel when a holder dies; without a writable cache
+    folder, no lock (each process compiles, as before)."""
+    import fcntl
+    import hashlib
+
+    from engine.jit import cache_dir
+
+    name = hashlib.sha1(repr(scene).encode()).hexdigest()[:16]
+    try:
+        folder = cache_dir() / "compiling"
+        folder.mkdir(parents=True, exist_ok=True)
+        fd = os.open(folder / f"{name}.lock", os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)   # releases the lock

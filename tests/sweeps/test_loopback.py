@@ -21,6 +21,12 @@ from .conftest import SIMULATE_SPEC
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # every socket of submit and serve
 
+# priced at seconds of work a worker (sweeps.planning.plan.work_s), so submit starts a local
+# cluster: the 8-point e2e spec is priced below a cluster's start and runs on threads of
+# the submitter, which listens on nothing
+CLUSTER_SPEC = SIMULATE_SPEC.replace("t_end = 12.0", "t_end = 300.0").replace(
+    'accuracy = "draft"', 'accuracy = "standard"')
+
 
 def _listening(pid: int) -> list[tuple[int, str, int]]:
     found = []
@@ -46,7 +52,7 @@ def test_every_socket_binds_loopback(command, tmp_path):
     gate = tmp_path / "gate"
     gate.mkdir()
     spec = tmp_path / "sim.toml"
-    spec.write_text(SIMULATE_SPEC)
+    spec.write_text(CLUSTER_SPEC)
     env = {**os.environ, "DITHERLAB_BLOCK_GATE": str(gate)}
     store = str(tmp_path / "store")
     if command == "serve":

@@ -1,0 +1,243 @@
+"""The fixed costs around a sweep's points (issue 37): the error estimate's re-runs among the
+blocks, longest expected first; a small sweep on threads of the submitting process, writing
+the cube a cluster writes; one compilation of a scene per machine; a kill while the
+re-runs run among the blocks leaves a resumable sweep."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import store
+from sweeps.estimates.error_reruns import ESTIMATE_FILE, SampleRuns
+from sweeps.planning.plan import make_plan, work_s
+from sweeps.run import dispatch
+from sweeps.run import submit as submit_module
+from sweeps.run.submit import small, submit
+from sweeps.spec import load_spec, parse_spec
+from sweeps.workers import task
+from sweeps.workers.block_gate import RERUN_GATE_ENV
+from sweeps.workers.task import block_key
+from sweeps.workers.threads import ThreadClient
+
+from ..helpers import BIN, ditherlab, wait_for
+from .conftest import SIMULATE_SPEC, BlockGate
+
+# 16 points, 4 omegas: blocks of one omega each cost alike, and the re-runs (one level
+# finer, 12 of the 16 points) cost more or less than a block
+SPEC = {"name": "fixed-costs", "friction": "lugre", "dither": "square-velocity",
+        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
+        "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
+        "grid": {"W": [0.1, 0.3, 0.5, 0.7], "omega": [100.0, 300.0, 1000.0, 3000.0],
+                 "v_ref": [0.4], "v_d": [0.1]}}
+
+
+class _Sink:
+    """What the local dispatch needs of a BlockSink: journal nothing, never stop."""
+
+    def __init__(self):
+        self.blocks = []
+
+    def __call__(self, b, record):
+        self.blocks.append(b)
+
+    def should_stop(self):
+        return False
+
+
+class _Bar:
+    def update(self, n):
+        pass
+
+    def set_postfix_str(self, text):
+        pass
+
+
+def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
+    """One thread: the tasks start in the order of their expected cost, the re-runs (one
+    level finer) merged with the blocks, not after them."""
+    plan = make_plan(parse_spec(SPEC))
+    sample = SampleRuns(plan)
+    started = []
+    lock = threading.Lock()
+
+    def record(scene, points, p, settings, index=None, sizes=None, gate=None):
+        with lock:
+            started.append(("rerun" if settings == sample.finer.settings else "block",
+                            tuple(np.asarray(index).tolist())))
+        return None
+
+    monkeypatch.setattr(task, "compute_block", record)
+    todo = list(range(len(plan.blocks)))[::-1]   # any order in: longest first out
+    with ThreadClient(1) as pool:
+        dispatch._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample)
+        while sample.submit_next(pool):   # those left after the last block: the estimate's
+            pass
+        pool.gather(list(sample.futures.values()))
+    cost = {("block", tuple(plan.blocks[b].tolist())): work_s(plan, plan.blocks[b])
+            for b in todo}
+    cost.update({("rerun", (int(i),)): c for i, c in
+                 zip(sample.index[sample.order], sample.costs)})
+    assert sorted(started) == sorted(cost), started
+    costs = [cost[t] for t in started]
+    assert costs == sorted(costs, reverse=True), list(zip(started, costs))
+    kinds = [k for k, _ in started]   # the costliest re-runs first, the cheapest last
+    assert kinds[0] == kinds[-1] == "rerun" and "block" in kinds, kinds
+
+
+def test_a_sweep_priced_below_a_cluster_start_is_small():
+    assert small(make_plan(parse_spec(SPEC)), list(range(8)), 2)
+    big = {**SPEC, "time": {"t_end": 3000.0, "t_transient": 4.0}, "accuracy": "standard"}
+    plan = make_plan(parse_spec(big))
+    assert not small(plan, list(range(len(plan.blocks))), 2)
+
+
+def _results(path: Path) -> dict:
+    """Every variable's bytes and every attribute but the timing (``cost_s``) and the
+    creation time."""
+    cube = store.read_cube(path)
+    out = {f"var:{k}": (str(v.values.dtype), v.values.tobytes())
+           for k, v in cube.variables.items() if k != "cost_s"}
+    out.update({f"attr:{k}": repr(v) for k, v in cube.attrs.items() if k != "created"})
+    return out
+
+
+@pytest.mark.long
+def test_threads_write_the_cube_a_local_cluster_writes(tmp_path, monkeypatch):
+    """Bit for bit: the same sweep on threads of the submitter and on a local cluster of
+    two worker processes (the error estimate's attributes included)."""
+    plan = make_plan(parse_spec(SPEC))
+    threads = submit(plan, tmp_path / "threads", progress=False)
+    assert "cluster_s" not in threads.timings, threads.timings   # it ran here
+    monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
+    cluster = submit(make_plan(parse_spec(SPEC)), tmp_path / "cluster", progress=False)
+    assert "cluster_s" in cluster.timings, cluster.timings
+    assert threads.state == cluster.state == "done"
+    a, b = _results(threads.cube_path), _results(cluster.cube_path)
+    estimate = json.loads(store.read_cube(threads.cube_path).attrs["error_estimate"])
+    assert estimate["compared_with"] == "standard" and estimate["sample_points"] == 12
+    assert a.keys() == b.keys()
+    assert [k for k in a if a[k] != b[k]] == []
+
+
+COMPILE = """
+import json, sys
+import numpy as np
+from numba.core import event
+from sweeps.planning.plan import make_plan
+from sweeps.spec import parse_spec
+from sweeps.workers.task import warm_up
+plan = make_plan(parse_spec(json.loads(sys.argv[1])))
+print("ready", flush=True)
+with event.install_recorder("numba:compile") as rec:
+    warm_up(plan.scene, plan.params, plan.numerics.settings)
+print(json.dumps({"compiled": len(rec.buffer)}), flush=True)
+"""
+
+
+@pytest.mark.long
+def test_two_processes_compile_a_scene_once(tmp_path):
+    """Two processes warm up one scene with an empty kernel cache, both started before
+    either could compile (the test holds the scene's lock until both are ready): one
+    compiles, the other loads the kernel from the cache."""
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "cache")}
+    script = tmp_path / "compile.py"
+    script.write_text(COMPILE)
+    holder = subprocess.Popen([sys.executable, "-c", textwrap.dedent("""
+        import json, sys
+        from sweeps.planning.plan import make_plan
+        from sweeps.spec import parse_spec
+        from sweeps.workers.task import compile_lock
+        plan = make_plan(parse_spec(json.loads(sys.argv[1])))
+        with compile_lock(plan.scene):
+            print("held", flush=True)
+            sys.stdin.readline()
+        """), json.dumps(SPEC)], env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+        text=True)
+    assert holder.stdout.readline().strip() == "held"
+    procs = [subprocess.Popen([sys.executable, str(script), json.dumps(SPEC)], env=env,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    try:
+        for p in procs:
+            assert p.stdout.readline().strip() == "ready", p.stderr.read()
+        holder.stdin.write("\n")
+        holder.stdin.flush()
+        holder.wait(timeout=60)
+        outs = [p.communicate(timeout=900) for p in procs]
+    finally:
+        for p in (holder, *procs):
+            if p.poll() is None:
+                p.kill()
+    compiled = sorted(json.loads(out.strip().splitlines()[-1])["compiled"] for out, _ in outs)
+    assert compiled[0] == 0 < compiled[1], (compiled, [err[-2000:] for _, err in outs])
+
+
+# the resume test's sweep: 32 one-point blocks of ~0.1-0.3 s, on a local cluster; its
+# re-runs (reference) are priced above the blocks of their omega: they start among them
+RESUME_SPEC = SIMULATE_SPEC.replace("block_size = 2", "block_size = 1").replace(
+    "t_end = 12.0", "t_end = 300.0").replace(
+    'accuracy = "draft"', 'accuracy = "standard"').replace(
+    "W = [0.0, 0.2, 0.4, 0.6]", "W = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7]").replace(
+    "v_ref = [0.4]", "v_ref = [0.3, 0.4]")
+
+
+@pytest.mark.long
+def test_a_kill_while_reruns_run_among_the_blocks_leaves_a_resumable_sweep(
+        tmp_path, spec_file, env, gate):
+    """SIGKILL once a re-run of the error sample has run and a block is journaled, the
+    other re-runs held at their gate ($DITHERLAB_RERUN_GATE) and the other blocks at
+    theirs: the journal keeps the block; the next submit computes only the missing blocks
+    and the whole estimate, and its cube (estimate included) equals a clean run's."""
+    path = spec_file(RESUME_SPEC)
+    spec = load_spec(path)
+    plan = make_plan(spec)
+    sample = SampleRuns(plan)
+    reruns = {block_key(sample.scene, sample.points[i:i + 1], sample.finer.settings)
+              for i in range(len(sample.order))}
+    # priced above every block (one level finer): the re-runs start first
+    assert max(sample.costs) > max(work_s(plan, b) for b in plan.blocks)
+    held = BlockGate(tmp_path / "rerun-gate")
+    env[RERUN_GATE_ENV] = str(held.path)
+    crashed, clean = tmp_path / "crashed", tmp_path / "clean"
+    journal = crashed / spec.sweep_id / "journal"
+    log = Path(env["DITHERLAB_BLOCK_LOG"])
+    keys = lambda: [line.split()[1] for line in log.read_text().splitlines()] \
+        if log.exists() else []
+    ran_reruns = lambda: len(set(keys()) & reruns)
+    done = lambda: len(store.Journal(journal).files())   # journaled blocks
+    proc = subprocess.Popen([str(BIN), "submit", str(path), "--quiet", "--store", str(crashed)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                            start_new_session=True)
+    try:
+        gate.let(1)
+        let = 0
+        while done() < 1:   # re-runs through one by one until the block is journaled
+            if ran_reruns() == let:
+                held.let(1)
+                let += 1
+            wait_for(lambda: ran_reruns() >= let or done() >= 1, "a re-run or a block",
+                     process=proc, poll=0.02)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)   # the submitter and its local cluster
+        proc.wait()
+        gate.open()
+        held.open()
+    assert done() == 1 and 1 <= ran_reruns() < len(reruns), (done(), ran_reruns())
+    assert not (crashed / spec.sweep_id / ESTIMATE_FILE).exists()
+
+    resumed = ditherlab("submit", str(path), "--quiet", store=crashed, check=True)
+    assert f"ran {len(plan.blocks) - 1} blocks" in resumed.stdout, resumed.stdout
+    assert (crashed / spec.sweep_id / ESTIMATE_FILE).exists()
+    ditherlab("submit", str(path), "--quiet", store=clean, check=True)
+    a = _results(crashed / spec.sweep_id / "cube.nc")
+    b = _results(clean / spec.sweep_id / "cube.nc")
+    assert [k for k in a if a[k] != b[k]] == []
