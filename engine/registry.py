@@ -70,7 +70,8 @@ def resolve(kind: str, ref: str):
         if ref in table:
             return table[ref]
         hint = difflib.get_close_matches(ref, names, n=1)
-        raise ModelError(f"{kind}: got {ref!r}; must be one of {', '.join(names)}"
+        raise ModelError(f"{kind}: got {_short(ref)}; must be one of "
+                         f"{', '.join(repr(n) for n in names)}"
                          + (f" (did you mean {hint[0]!r}?)" if hint else "")
                          + ", or an import path 'module:Name' of your own")
     module_name, _, attr = ref.rpartition(":")
@@ -135,6 +136,12 @@ def _import(kind: str, ref: str, module_name: str):
     except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
         raise ModelError(f"{kind} {ref!r}: cannot import {module_name!r}: {_one_line(exc)}"
                          f"{_where(exc)}") from None
+
+
+def _short(value, limit: int = 60) -> str:
+    """``repr(value)`` cut to about ``limit`` characters (an echoed spec value)."""
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "..."
 
 
 def _one_line(exc: BaseException) -> str:
@@ -250,7 +257,7 @@ def check_values(friction: str, system_: str, values: dict) -> dict:
         if name not in known:
             hint = difflib.get_close_matches(name, list(known), n=1)
             takes = ", ".join(known) or "no parameters of their own"
-            raise ModelError(f"params: unknown parameter {name!r} for friction {friction!r} "
+            raise ModelError(f"params: unknown parameter {_short(name)} for friction {friction!r} "
                              f"and system {system_!r} (they take {takes})"
                              + (f"; did you mean {hint[0]!r}?" if hint else ""))
     out = {}

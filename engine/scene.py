@@ -30,7 +30,10 @@ class Scene:
     ``system``, ``friction`` -- a built-in name (:data:`engine.registry.SYSTEM_NAMES`,
     :data:`engine.registry.LAW_NAMES`) or an import path ``"module:Name"`` of a model of the
     contract (engine.contract); ``sizes`` -- the lengths of the models' vector parameters
-    (``(("alpha", 4), ("k", 4))`` for a 4-element GMS), which set their numbers of states.
+    (``(("alpha", 4), ("k", 4))`` for a 4-element GMS), which set their numbers of states;
+    ``digests`` -- the source digest of each model brought by import path, taken where the
+    Scene is made (the submitter): a worker whose copy of the module differs refuses to
+    build its kernels (engine.systems.build_context) instead of computing other numbers.
     ``delta``, ``delta_d`` -- the exponents of Eqs. 2.4 and 2.5 folded into the simulate
     kernels when they are 1 or 2 (no run-time test per evaluation); None reads them from
     ``p``. A parameter vector must then carry the same values (:meth:`check_params`).
@@ -49,11 +52,16 @@ class Scene:
     delta: float | None = None
     delta_d: float | None = None
     sizes: tuple = ()
+    digests: tuple = ()
 
     def __post_init__(self):
         registry.system(self.system)     # ModelError (a ValueError) naming what is wrong
         registry.law(self.friction)
         object.__setattr__(self, "sizes", tuple(sorted(tuple(kv) for kv in self.sizes)))
+        if not self.digests:   # the source of each brought model, as this process reads it
+            object.__setattr__(self, "digests", tuple(
+                (ref, registry.source_digest(ref)) for ref in (self.friction, self.system)
+                if registry.is_import_path(ref)))
         if self.dither not in DITHER_KINDS:
             raise ValueError(f"dither must be one of {DITHER_KINDS}, got {self.dither!r}")
         if self.path not in PATHS:

@@ -25,6 +25,9 @@ class Dahl(FrictionLaw):
                                   "sigma1 = 0)", lo=1.0, hi=10.0)}
     phases = "band"
 
+    def effects(self, scene):
+        return {"stribeck": False, "bristle damping": False}   # Dahl has neither
+
     def build(self, b):
         Z, ia, viscous = b.z0, b.ix["dahl_alpha"], b.scene.viscous
 

@@ -45,6 +45,9 @@ class GMS(FrictionLaw):
     }
     phases = "alpha"
 
+    def effects(self, scene):
+        return {"bristle damping": False, "stick/slip modes": True}   # no sigma1 in GMS
+
     def n_states(self, size):
         return int(size.get("k", 1))
 

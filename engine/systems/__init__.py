@@ -43,6 +43,12 @@ class System(NamedTuple):
 
 def build_context(scene, jit=njit) -> tuple:
     """``(law, system, Build)`` of ``scene``: its models and their layout in y and p."""
+    for ref, digest in scene.digests:
+        here = registry.source_digest(ref)
+        if here != digest:
+            raise ModelError(f"{ref}: this process's copy of the module (source {here}) is not "
+                             f"the one the sweep was planned with (source {digest}); run the "
+                             "workers with the same file")
     law, sysm = registry.law(scene.friction), registry.system(scene.system)
     if scene.dither not in sysm.dithers:
         raise ModelError(f"dither: {scene.dither!r} is not one the {sysm.name} system takes "
@@ -201,3 +207,18 @@ def compile_line(scene, exc: BaseException) -> str:
     kind = "numba cannot compile" if type(exc).__module__.startswith("numba") else \
         f"{type(exc).__name__} while building"
     return (f"{kind} {' / '.join(refs) or scene.friction}: {first[:200]}{where}")
+
+
+def describe_states(scene) -> str:
+    """The state vector of ``scene`` in words (``ditherlab plan``): the system's, the law's
+    (with the modes it keeps) and the quadratures."""
+    law, sysm, b = build_context(scene)
+    parts = [f"{', '.join(sysm.state_names)} ({sysm.name})"] if sysm.state_names else []
+    n_modes = int(law.n_modes(b.size))
+    if b.n_law:
+        what = "z" if b.n_law == 1 else f"z_1..z_{b.n_law}"
+        parts.append(f"{what} ({law.name}{f', {n_modes} stick/slip modes' if n_modes else ''})")
+    extra = (b.qf >= 0) + int(sysm.n_tail(scene))
+    if extra:
+        parts.append(f"{extra} quadrature{'s' if extra > 1 else ''}")
+    return " + ".join(parts) + f"; {b.n_err} under error control"

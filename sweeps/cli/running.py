@@ -159,6 +159,8 @@ def cmd_plan(args) -> int:
         on = [k for k, v in plan.effects().items() if v]
         off = [k for k, v in plan.effects().items() if not v]
         print(f"effects    compiled in: {', '.join(on) or '-'}; left out: {', '.join(off) or '-'}")
+        from engine.systems import describe_states
+        print(f"states     {describe_states(plan.scene)}")
         s = plan.numerics.settings
         stops = ("; steps land on every square-wave switch"
                  if plan.scene.dither == "square-velocity" else "")

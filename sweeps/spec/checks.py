@@ -25,6 +25,9 @@ def check_choices(spec: Spec) -> list[str]:
     if spec.system == "contact" and spec.method == "averaged":
         problems.append("method: 'averaged' applies to the slider system; use 'simulate' or "
                         "'hbm' for system = 'contact'")
+    elif spec.system not in ("slider", "contact") and spec.method != "simulate":
+        problems.append(f"method: {spec.method!r} has a theory for the paper's slider and "
+                        f"contact only; use method = 'simulate' for system = {spec.system!r}")
     if spec.system == "contact" and spec.dither == "sine-force":
         problems.append("dither: 'sine-force' needs a mass; the contact system (no inertia) "
                         "takes 'sine-velocity', 'square-velocity' or 'none'")

@@ -66,7 +66,8 @@ def format_error(err: dict) -> str:
     if kind == "literal_error":
         return f"{loc}: got {show(value)}; {msg.lower()}"
     if kind == "value_error":
-        if loc and msg.startswith(f"{loc}"):   # a model's own line names its field already
+        if loc and (msg.startswith(f"{loc}:") or msg.startswith(f"{loc} '")):
+            # a model's own line (engine.registry) names its field already
             return msg
         if not loc and msg.startswith("params"):
             return msg

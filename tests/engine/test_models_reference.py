@@ -66,8 +66,12 @@ def test_dahl_with_exponent_one_is_lugre_with_g_fc_and_no_bristle_damping():
 
 def _gms_loop(k, alpha, C, amplitude_path, settings=None):
     """Force and displacement of a GMS contact driven along a prescribed displacement
-    (tests/engine/stroke.py: a system a user brings)."""
-    from tests.engine.stroke import stroke_run
+    (docs/examples/mylab/rigs.py: a system a user brings)."""
+    import sys
+    examples = str(Path(__file__).resolve().parents[2] / "docs" / "examples")
+    if examples not in sys.path:
+        sys.path.insert(0, examples)
+    from mylab.rigs import stroke_run
     return stroke_run(k, alpha, C, amplitude_path, settings)
 
 

@@ -1,5 +1,7 @@
-"""A system a user might bring (engine.contract): a contact driven along a prescribed
-displacement path with reversals, for hysteresis loops (tests/engine/test_models_reference).
+"""A system as a user brings it (engine.contract, docs/MODELS.md): a contact driven along a
+prescribed displacement path with reversals, to draw a friction law's hysteresis loops
+(``system = "mylab.rigs:Stroke"``; tests/engine/test_models_reference.py,
+scripts/models_figures.py).
 
 The path visits the corners ``path[0], path[1], ...`` in turn; each leg takes
 ``|dx| / speed`` and follows a half-cosine, ``x = x_a + (x_b - x_a) (1 - cos(pi s)) / 2``, so
@@ -67,7 +69,7 @@ class Stroke(MechanicalSystem):
         return SystemKernels(drive, dynamics, position, velocity, nothing, nothing)
 
 
-def stroke_run(k, alpha, C, path, settings=None, samples_per_leg=200):
+def stroke_run(k, alpha, C, path, settings=None, samples_per_leg=200, friction="gms"):
     """(x, F, marks): displacement and friction force sampled along the path, and the
     sample index of each corner."""
     from engine import Scene, Settings, simulate
@@ -78,19 +80,19 @@ def stroke_run(k, alpha, C, path, settings=None, samples_per_leg=200):
     # corners on the sampling grid: legs are multiples of dt when path steps are multiples
     t_end = sum(legs)
     own = {"k": list(k), "alpha": list(alpha), "C": C, "path": list(path), "speed": speed}
-    system = "tests.engine.stroke:Stroke"
-    p = registry.pack("gms", system, own, fs=1.5, fc=1.0, vs=0.1, sigma2=0.0,
+    system = "mylab.rigs:Stroke"
+    p = registry.pack(friction, system, own, fs=1.5, fc=1.0, vs=0.1, sigma2=0.0,
                       t_end=t_end, t_transient=0.0)
-    scene = Scene(system=system, friction="gms", dither="none", viscous=False,
+    scene = Scene(system=system, friction=friction, dither="none", viscous=False,
                   bristle_damping=False, outputs=("F_mean",),
-                  sizes=registry.sizes_of("gms", system, own))
+                  sizes=registry.sizes_of(friction, system, own))
     r = simulate(scene, p, settings or Settings(rtol=1e-10, atol=1e-13), record_dt=dt)
     assert r.status == 0
     n = len(k)
     F = r.y[:, :n] @ np.asarray(k)
     t = r.t
     corners = np.cumsum([0.0, *legs])
-    x = np.interp(t, corners, path)   # placeholder for the exact x below
+    x = np.interp(t, corners, path)
     # the exact displacement (half-cosine legs)
     for j, (a, b) in enumerate(zip(path[:-1], path[1:])):
         inside = (t >= corners[j]) & (t <= corners[j + 1])
