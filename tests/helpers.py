@@ -1,5 +1,8 @@
-"""What tests of every folder share: the ``ditherlab`` command (:data:`BIN`, :func:`ditherlab`),
-the command line run in this process (:func:`in_process`), the one wait loop
+"""What tests of every folder share: the specs of the end-to-end tests, the block gate
+(:class:`BlockGate`), a Ctrl-C'able child (:func:`as_a_terminal_job`), cubes' results
+compared (:func:`results`, :func:`assert_same_results`), the ``ditherlab`` command
+(:data:`BIN`, :func:`ditherlab`), the command line run in this process
+(:func:`in_process`), the one wait loop
 (:func:`wait_for`): a condition polled until it holds, a deadline that fails the test with
 what was awaited, and the process the test depends on checked alive on every poll; and a
 clock that ticks (:func:`ticking_clock`) for code that takes one, instead of sleeps."""
@@ -8,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -15,6 +19,80 @@ from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
 BIN = Path(sys.executable).parent / "ditherlab"
+TIMING = ("cost_s",)   # wall-clock seconds differ between runs; everything else must not
+
+
+def as_a_terminal_job() -> None:
+    """``preexec_fn`` for a submitter that a test Ctrl-C's: SIGINT back to its default, as in
+    a terminal's foreground job. A test run started in the background of a script (``.ci/run
+    &``, nohup in a non-interactive shell) inherits SIGINT ignored, and Python keeps it
+    ignored, so the child would never see the test's Ctrl-C and run to the end."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+SIMULATE_SPEC = """
+name = "e2e-sim"
+friction = "lugre"
+dither = "square-velocity"
+method = "simulate"
+outputs = ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"]
+accuracy = "draft"
+block_size = 2
+[time]
+t_end = 12.0
+t_transient = 4.0
+[grid]
+W = [0.0, 0.2, 0.4, 0.6]
+omega = [300.0, 1000.0]
+v_ref = [0.4]
+v_d = [0.1]
+"""
+
+AVERAGED_SPEC = """
+name = "e2e-avg"
+friction = "lugre"
+dither = "square-velocity"
+method = "averaged"
+[grid]
+W = { start = 0.0, stop = 1.0, num = 21 }
+v_ref = { start = 0.02, stop = 1.0, num = 25 }
+v_d = [0.1]
+"""
+
+
+class BlockGate:
+    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate): a FIFO every block
+    computation takes a byte from before it starts. ``let(n)`` lets n more blocks start;
+    ``open()`` lets every block start from now on. Held shut from creation."""
+
+    def __init__(self, path: Path):
+        os.mkfifo(path)
+        self.path = path
+        self._fd: int | None = os.open(path, os.O_RDWR)   # a writer held: readers wait
+
+    def let(self, n: int) -> None:
+        os.write(self._fd, b"x" * n)
+
+    def open(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)   # no writer left: every read, now and later, passes
+            self._fd = None
+
+
+def results(cube):
+    """A cube's results (``xarray.Dataset``, loaded), all but the wall-clock ``cost_s``."""
+    import xarray as xr
+
+    with xr.open_dataset(cube, engine="h5netcdf") as ds:
+        return ds.drop_vars(TIMING).load()
+
+
+def assert_same_results(a, b):
+    """Two cubes' :func:`results` identical, values and variables' attributes (the global
+    attributes carry times and the run's own facts)."""
+    import xarray as xr
+
+    xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
 
 
 def ditherlab(*args, store=None, env=None, check=False, text=True,

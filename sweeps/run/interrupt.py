@@ -4,7 +4,7 @@ Python raises KeyboardInterrupt wherever the main thread happens to be when SIGI
 arrives. When that is inside a weakref callback or a ``__del__`` (dask's futures and
 clients run many), the exception is printed as "Exception ignored in ..." and dropped,
 and a submitter runs on as if nobody had pressed Ctrl-C (seen under load in
-tests/sweeps/test_service.py's Ctrl-C test). :func:`remembered` installs a SIGINT handler
+tests/e2e/test_service.py's Ctrl-C test). :func:`remembered` installs a SIGINT handler
 that notes the signal before raising; the dispatch loop calls :func:`check` every tick,
 which raises it again if it was swallowed. Installed only over Python's default handler
 (``serve`` has its own: the first SIGINT stops gracefully, sweeps.service).

@@ -17,8 +17,7 @@ import store
 import sweeps
 from sweeps.planning.refine import Refinement, default_stride
 
-from ..helpers import BIN, ditherlab
-from .test_cluster_and_resume import assert_same_results, results
+from ..helpers import BIN, assert_same_results, ditherlab, results
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -175,7 +174,7 @@ def test_values_read_from_inferred_points_carry_a_warning(tmp_path):
     """A refined cube's inferred points hold a computed neighbour's outputs (right class,
     not a computed value): ``query`` and ``map --kind friction`` say so in one warning
     line; the class maps do not, nor does a query of computed points only."""
-    from .conftest import AVERAGED_SPEC
+    from ..helpers import AVERAGED_SPEC
 
     spec = tmp_path / "chart.toml"
     spec.write_text(AVERAGED_SPEC.replace('name = "e2e-avg"', 'name = "chart"\nrefine = true'))

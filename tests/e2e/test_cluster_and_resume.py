@@ -16,25 +16,12 @@ import xarray as xr
 import store
 from sweeps.spec import load_spec
 
-from ..helpers import BIN, ditherlab, wait_for
-from .conftest import SIMULATE_SPEC
+from ..helpers import BIN, SIMULATE_SPEC, assert_same_results, ditherlab, results, wait_for
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # dask clusters and resumes
 
 DASK = Path(sys.executable).parent / "dask"
-TIMING = ("cost_s",)  # wall-clock seconds differ between runs; everything else must not
-
-
-def results(cube) -> xr.Dataset:
-    with xr.open_dataset(cube, engine="h5netcdf") as ds:
-        return ds.drop_vars(TIMING).load()
-
-
-def assert_same_results(a, b):
-    xr.testing.assert_identical(a.drop_attrs(), b.drop_attrs())
-
-
 def test_external_cluster_gives_the_local_cube(tmp_path, spec_file):
     path = spec_file(SIMULATE_SPEC)
     spec = load_spec(path)

@@ -10,7 +10,8 @@ import sys
 
 import pytest
 
-from .conftest import AVERAGED_SPEC
+
+from ..helpers import AVERAGED_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -11,8 +11,7 @@ import pytest
 import store
 from sweeps.lookup import resolve_sweep
 
-from ..helpers import ditherlab
-from .conftest import AVERAGED_SPEC, SIMULATE_SPEC
+from ..helpers import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 

@@ -26,9 +26,10 @@ from sweeps.spec import load_spec
 from sweeps.workers.task import block_key
 from sweeps.workers.task import compute_block as REAL_COMPUTE_BLOCK
 
-from ..helpers import BIN, ditherlab, wait_for
-from .conftest import AVERAGED_SPEC, SIMULATE_SPEC, as_a_terminal_job
-from .test_cluster_and_resume import RESUME_SPEC, assert_same_results, results
+from ..helpers import (AVERAGED_SPEC, BIN, SIMULATE_SPEC, as_a_terminal_job, assert_same_results,
+                       ditherlab, results, wait_for)
+
+from .test_cluster_and_resume import RESUME_SPEC
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # the queue's processes: kills, signals, two submitters

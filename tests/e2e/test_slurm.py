@@ -1,5 +1,5 @@
 """Sweeps on a real batch system: a single-node Slurm started in a temporary folder
-(tests/sweeps/slurm.py), workers as batch jobs through dask-jobqueue (docs/BATCH.md).
+(tests/e2e/slurm.py), workers as batch jobs through dask-jobqueue (docs/BATCH.md).
 
 - ``ditherlab submit --cluster slurm`` and ``run_sweep(client=Client(SLURMCluster(...)))``
   give a cube identical to a local run's;

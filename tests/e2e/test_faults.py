@@ -22,8 +22,8 @@ from sweeps.run.submit import submit
 from sweeps.spec import load_spec
 
 from ..guarantee import skip_unless_ci
-from ..helpers import BIN, ditherlab, wait_for
-from .conftest import AVERAGED_SPEC, as_a_terminal_job
+from ..helpers import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab, wait_for
+
 from .test_cluster_and_resume import RESUME_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)

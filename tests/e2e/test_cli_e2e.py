@@ -9,8 +9,7 @@ import xarray as xr
 
 from sweeps.spec import load_spec
 
-from ..helpers import ditherlab
-from .conftest import AVERAGED_SPEC, SIMULATE_SPEC
+from ..helpers import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
