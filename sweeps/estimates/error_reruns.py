@@ -56,10 +56,11 @@ class SampleRuns:
         self.plan, self.finer = plan, errest.finer_numerics(plan)
         self.index, self.points = errest.sample(plan)
         self.scene = plan.scene.with_(integrator=self.finer.integrator)
-        cost = plan.costs_at(self.index)
+        # expected seconds of each re-run (sweeps.planning.plan.work_s), costliest first
+        cost = np.array([work_s(plan, self.index[i:i + 1], self.finer)
+                         for i in range(len(self.index))])
         self.order = np.argsort(-cost, kind="stable")
-        # expected seconds of each re-run, in submission order (sweeps.planning.plan.work_s)
-        self.costs = [work_s(plan, self.index[i:i + 1], self.finer) for i in self.order]
+        self.costs = [float(cost[i]) for i in self.order]   # in submission order
         self.futures: dict[int, object] = {}
 
     def running(self) -> int:

@@ -39,6 +39,10 @@ OMEGA_FLOOR = 50.0
 SECONDS_PER_RADIAN = 1e-5
 STANDARD_RTOL = 1e-8       # the standard level's DP5 tolerance, SECONDS_PER_RADIAN's level
 ANALYSIS_POINT_S = 2e-6    # an averaged or harmonic-balance point (bench_analysis: 1-5 us)
+# A dithered point's price grows with the dither's amplitude and saturates: (W + a) / (W + b).
+# Fig. 14's elasto-plastic slider at draft, omega = 1000: W = 0, 0.5, 1.5, 3 cost 0.03, 0.6,
+# 0.82, 1 of the W = 3 point (0.14, 0.71, 0.92, 1 here); at omega = 100 0.01, 0.36, 0.7, 1
+W_SHARE = (0.02, 0.3)
 BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
 # Tasks per second one submitting process hands out and takes back: dask's scheduler and
@@ -178,15 +182,20 @@ def level_price(num: Numerics) -> float:
 def work_s(plan: Plan, index: np.ndarray, num: Numerics | None = None) -> float:
     """Rough serial seconds of the points at flat indices ``index`` at ``num`` (the plan's
     own numerics by default): their relative costs x t_end x SECONDS_PER_RADIAN x the
-    level's price. Fitted to Fig. 14 (standard); it over-prices dithered LuGre points by
-    20-45x and prices undithered ones about right (1 ms a draft point of 100 tau), so it
-    errs towards a cluster. The analysis paths are priced at ANALYSIS_POINT_S a point."""
+    level's price, and for a dithered scene the share W_SHARE of the dither's amplitude.
+    Fitted to Fig. 14 (standard); it over-prices dithered LuGre points by 20-45x and prices
+    undithered ones about right (1 ms a draft point of 100 tau), so it errs towards a
+    cluster. The analysis paths are priced at ANALYSIS_POINT_S a point."""
     index = np.asarray(index, np.int64)
     if plan.path != "simulate":
         return ANALYSIS_POINT_S * index.size
     num = num or plan.numerics
+    cost = plan.costs_at(index)
+    if plan.scene.dither != "none":   # the dither's amplitude: W = 0 is hardly dithered
+        w = np.abs(plan.coords["W"][np.unravel_index(index, plan.shape)[0]])
+        cost = cost * (w + W_SHARE[0]) / (w + W_SHARE[1])
     t_end = float(plan.params[P.T_END])
-    return float(plan.costs_at(index).sum()) * t_end * SECONDS_PER_RADIAN * level_price(num)
+    return float(cost.sum()) * t_end * SECONDS_PER_RADIAN * level_price(num)
 
 
 def make_plan(spec: Spec, level: str | None = None) -> Plan:
