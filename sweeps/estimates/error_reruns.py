@@ -19,6 +19,7 @@ from ..workers.block_gate import RERUN_GATE_ENV
 from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
+GATHER_TICK_S = 0.05   # how often the re-runs still running are looked at
 
 
 def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
@@ -85,21 +86,24 @@ class SampleRuns:
                                         gate=RERUN_GATE_ENV, pure=False)
         return True
 
-    def gather(self, client, tick=None) -> BlockRecord:
+    def gather(self, client, tick=None, idle=None) -> BlockRecord:
         """Every re-run's result, in sample order, as one record (the rest submitted
-        now); ``tick()`` once per re-run as it finishes."""
+        now); ``tick()`` once per re-run as it finishes, ``idle()`` every GATHER_TICK_S
+        between (a progress bar's keep-alive)."""
         while self.submit_next(client):
             pass
         futures = [self.futures[i] for i in range(len(self.order))]
-        if hasattr(client, "as_completed"):   # a ThreadClient
-            finishing = client.as_completed(futures)
-        else:
-            from distributed import as_completed
-
-            finishing = as_completed(futures, loop=client.loop)
-        for _ in finishing:
-            if tick is not None:
-                tick()
+        seen = 0
+        while seen < len(futures):   # dask's and concurrent.futures' alike
+            done = sum(f.done() for f in futures)
+            for _ in range(done - seen):
+                if tick is not None:
+                    tick()
+            seen = done
+            if seen < len(futures):
+                if idle is not None:
+                    idle()
+                time.sleep(GATHER_TICK_S)
         return BlockRecord.concatenate(client.gather(futures))
 
     def cancel(self, client) -> None:
@@ -123,7 +127,7 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
                 if next(ticks) >= done:
                     bar.update()
 
-            result = runs.gather(client, tick=tick)
+            result = runs.gather(client, tick=tick, idle=getattr(bar, "keep_alive", None))
     return errest.compare(plan, cube, index, result, finer.label)
 
 

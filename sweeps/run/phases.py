@@ -6,20 +6,37 @@ work it does not mention goes on (the estimate's re-runs took ~20 s on a 100-poi
 Fig. 14 sweep, after the last point)."""
 from __future__ import annotations
 
+import functools
 import sys
+import time
 
 MININTERVAL_S = 0.5   # tqdm redraws at most this often (a phase change redraws at once)
+REDRAW_S = 5.0        # ... and at least this often while a phase's work goes on (issue 38:
+                      # the estimate of a 100-point sweep showed nothing new for 10.2 s)
 
 
 def bar(plan, phase: str, total: int, unit: str, enabled: bool, initial: int = 0):
     """A tqdm bar ``<name> [<id>] <phase>: k/total`` (from ``initial``); a no-op bar when
-    not ``enabled``."""
-    from tqdm import tqdm
-
+    not ``enabled``. Its ``keep_alive()``, called while waiting, redraws it (elapsed time,
+    rate, ETA) when nothing was drawn for REDRAW_S: a task can run longer than that."""
     # miniters=1: tqdm's adaptive miniters skipped the redraws of a run's last blocks (it
     # showed 84 % until the bar closed, 13 s later)
-    return tqdm(total=total, unit=unit, desc=f"{plan.spec.name} [{plan.sweep_id}] {phase}",
-                disable=not enabled, mininterval=MININTERVAL_S, miniters=1, initial=initial)
+    return _bar_class()(total=total, unit=unit,
+                        desc=f"{plan.spec.name} [{plan.sweep_id}] {phase}",
+                        disable=not enabled, mininterval=MININTERVAL_S, miniters=1,
+                        initial=initial)
+
+
+@functools.cache
+def _bar_class():
+    from tqdm import tqdm
+
+    class Bar(tqdm):
+        def keep_alive(self) -> None:
+            if not self.disable and time.time() - self.last_print_t >= REDRAW_S:
+                self.refresh()
+
+    return Bar
 
 
 def display(plan, enabled: bool):

@@ -23,7 +23,8 @@ from engine import status as S
 
 from ..workers.cluster import dask_client
 from . import phases
-from .dispatch import run_blocks, run_blocks_local
+from .dispatch import run_blocks
+from .local import run_blocks_local
 from ..planning.plan import Plan, balanced_blocks
 from ..planning.refine import CLASS_OUTPUT, MARGIN_OUTPUT, Refinement
 from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate

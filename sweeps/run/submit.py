@@ -33,7 +33,8 @@ from ..workers import task
 from ..workers.cluster import EarlyStart
 from . import phases
 from .new_cube import empty_cube
-from .dispatch import run_blocks, run_blocks_local
+from .dispatch import run_blocks
+from .local import run_blocks_local
 from .lease_holder import LEASE_LOST, Lease
 from ..workers.matching import matched
 from .outcome import SubmitResult, abort, attached_result, final_result
@@ -191,7 +192,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
 
 def in_process(plan: Plan, scheduler: str | None) -> bool:
     """The analysis paths cost microseconds a point: they run in this process, not on a
-    cluster (sweeps.run.dispatch.run_blocks_local), unless a scheduler is named."""
+    cluster (sweeps.run.local.run_blocks_local), unless a scheduler is named."""
     return plan.path != "simulate" and scheduler is None
 
 
@@ -199,7 +200,7 @@ def small(plan: Plan, todo: list[int], workers) -> bool:
     """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: its blocks
     still to compute and the error sample's re-runs), spread over ``workers`` threads,
     is below IN_PROCESS_BELOW_S, the cost of starting a local cluster: it runs on threads
-    of this process (sweeps.run.dispatch.run_blocks_local). Not a refined sweep (its later
+    of this process (sweeps.run.local.run_blocks_local). Not a refined sweep (its later
     levels are unknown) nor batch jobs."""
     if not isinstance(workers, int) or plan.spec.refine:
         return False

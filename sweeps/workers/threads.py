@@ -4,7 +4,7 @@ makes (``submit``, ``gather``, ``cancel``), on a ``concurrent.futures`` thread p
 The engine's kernels release the GIL while they run (engine.jit: ``nogil``), so the
 threads compute side by side; a sweep whose estimated work is below the cost of starting a
 cluster runs here, with the same task (:func:`sweeps.workers.task.compute_block`), journal,
-cube and fingerprint checks as on a cluster (sweeps.run.dispatch.run_blocks_local). numba
+cube and fingerprint checks as on a cluster (sweeps.run.local.run_blocks_local). numba
 compiles a kernel once per process, under its own lock: the first thread to need it
 compiles, the others wait for it.
 """
@@ -31,13 +31,6 @@ class ThreadClient:
     def cancel(futures) -> None:
         for f in futures:
             f.cancel()
-
-    @staticmethod
-    def as_completed(futures):
-        """Each future as it finishes (``concurrent.futures.as_completed``)."""
-        from concurrent.futures import as_completed
-
-        return as_completed(list(futures))
 
     @staticmethod
     def wait_any(futures, timeout: float) -> set:

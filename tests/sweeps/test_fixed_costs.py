@@ -19,7 +19,7 @@ import pytest
 import store
 from sweeps.estimates.error_reruns import ESTIMATE_FILE, SampleRuns
 from sweeps.planning.plan import make_plan, work_s
-from sweeps.run import dispatch
+from sweeps.run import local
 from sweeps.run import submit as submit_module
 from sweeps.run.submit import small, submit
 from sweeps.spec import load_spec, parse_spec
@@ -60,6 +60,9 @@ class _Bar:
     def set_postfix_str(self, text):
         pass
 
+    def keep_alive(self):
+        pass
+
 
 def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
     """One thread: the tasks start in the order of their expected cost, the re-runs (one
@@ -78,7 +81,7 @@ def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
     monkeypatch.setattr(task, "compute_block", record)
     todo = list(range(len(plan.blocks)))[::-1]   # any order in: longest first out
     with ThreadClient(1) as pool:
-        dispatch._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample)
+        local._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample)
         while sample.submit_next(pool):   # those left after the last block: the estimate's
             pass
         pool.gather(list(sample.futures.values()))

@@ -1,0 +1,102 @@
+"""Computing a run's blocks on threads of this process (:func:`run_blocks_local`): the
+analysis paths, which cost microseconds per point, and a simulated sweep whose estimated
+work is below the cost of starting a cluster (sweeps.run.submit.small). The engine's
+kernels release the GIL, so the threads compute side by side; the same task, journal,
+checks and order as on a cluster (sweeps.run.dispatch)."""
+from __future__ import annotations
+
+import sys
+import threading
+import time
+
+from ..workers import task
+from ..workers.cluster import NOTICE_AFTER_S
+from ..workers.threads import ThreadClient
+from ..planning.plan import Plan, work_s
+from . import interrupt
+from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun_first,
+                       show_reruns)
+from .sink import BlockSink
+
+
+def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=None,
+                     workers=2, progress, timings, client=None, dashboard=None,
+                     sample=None, warm_up: bool = True) -> None:
+    """Compute ``todo`` on ``workers`` threads of this process: the analysis paths (they
+    cost microseconds per point), and a simulated sweep whose estimated work is below the
+    cost of starting a cluster (sweeps.run.submit.small). The same task, journal and
+    checks as on a cluster, the same longest-first order, the error sample's re-runs
+    (``sample``) among the blocks; the kernel is compiled once first (``warm_up``)."""
+    bar = points_bar(plan, todo, progress)
+    threads = workers if isinstance(workers, int) else 2
+    with ThreadClient(threads) as pool:
+        if plan.path == "simulate" and warm_up:
+            t = time.perf_counter()
+            if not _warm_up_here(plan, sink, progress):
+                bar.close()
+                return
+            timings["warm_up_s"] = time.perf_counter() - t
+        t = time.perf_counter()
+        sink.started()
+        _dispatch_local(pool, plan, todo, sink, bar, sample)
+        timings["compute_s"] = time.perf_counter() - t
+        bar.close()
+        if plan.path == "simulate":
+            finish_estimate(plan, pool, todo, sink, timings, sample, progress)
+
+
+def _warm_up_here(plan: Plan, sink: BlockSink, progress: bool) -> bool:
+    """Compile the kernel in this process, on a daemon thread (a Ctrl-C or a cancel during
+    a first compilation, which cannot be interrupted, leaves it behind instead of waiting
+    for it), saying so after NOTICE_AFTER_S; False if ``sink.should_stop()`` turned true
+    meanwhile."""
+    thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-compile",
+                              args=(plan.scene, plan.params, plan.numerics.settings))
+    thread.start()
+    t0 = time.monotonic()
+    while thread.is_alive():
+        thread.join(0.1)
+        interrupt.check()
+        if thread.is_alive() and sink.should_stop():
+            return False
+        if progress and t0 is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
+            print("ditherlab: compiling the engine for this scene (its first run here; "
+                  "cached for later runs)", file=sys.stderr, flush=True)
+            t0 = None
+    return True
+
+
+def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
+                    sample=None) -> None:
+    """:func:`_dispatch` on threads: one task per thread (plus one) in flight, longest
+    expected first, the re-runs among the blocks; each finished block journaled."""
+    cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
+    queue = list(reversed(longest_first(todo, cost_of)))
+    inflight: dict = {}   # future -> block
+    shown = [-1]
+    window = pool.threads + 1
+    while True:
+        interrupt.check()
+        stopping = sink.should_stop()
+        reruns = [f for f in (sample.futures.values() if sample is not None else ())
+                  if not f.done()]
+        while not stopping and len(inflight) + len(reruns) < window:
+            if rerun_first(sample, queue, cost_of):
+                sample.submit_next(pool)
+                reruns.append(None)
+                continue
+            if not queue:
+                break
+            b = queue.pop()
+            inflight[pool.submit(task.compute_block, plan.scene, plan.block_points(b),
+                                 plan.params, plan.numerics.settings, plan.blocks[b])] = b
+        if not inflight and (stopping or not queue):
+            break
+        running = [f for f in (sample.futures.values() if sample is not None else ())
+                   if not f.done()]
+        done = pool.wait_any([*inflight, *running], TICK_S * 5)
+        for b, record in [(inflight.pop(f), f.result()) for f in done if f in inflight]:
+            sink(b, record)   # a journal file each: few blocks here, and a block's file
+            bar.update(len(plan.blocks[b]))   # is what a repair sets aside
+        show_reruns(bar, sample, shown)
+        bar.keep_alive()
