@@ -5,8 +5,9 @@ the paper (``de = v_ref - v``, ``dv = e - F``) with sine-velocity dither
 ``u = v + W sin(omega t)``, the law's equations written out again here in numpy. Every
 switch is an event of ``solve_ivp`` (terminal): Dahl's ``u = 0`` and ``r = 0``; GMS's
 reversal ``u = 0`` and, per stuck element, ``alpha_i s(u) - |F_i| = 0``. At each event the
-integration stops, the modes are updated from the state there (as the engine's
-``update_modes`` does) and it restarts, so no step crosses a corner. The mean velocity
+integration stops, the modes change by which event fired (a reversal sticks every element,
+an element's event makes it slip in the direction of u: the law's definition, not the
+engine's state-based ``update_modes``) and it restarts, so no step crosses a corner. The mean velocity
 comes from the spring stretch, ``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with
 ``x = v_ref t - e``, and the mean friction from a quadrature state ``dQ = F``.
 
@@ -100,16 +101,14 @@ def run(law, own, point, window, rtol=1e-10):
             ev.terminal = True
         return out
 
-    def update(t, y):
-        u = u_of(t, y)
-        s = stribeck(u, q)
-        for i in range(n):
-            Fi = k[i] * y[2 + i]
-            if modes[i] == 0:
-                if Fi * u > 0 and abs(Fi) >= (1 - 1e-12) * a[i] * s:
-                    modes[i] = sgn(u)
-            elif modes[i] * u < 0:
-                modes[i] = 0.0
+    def update(t, y, which):
+        """The mode change of the event that stopped the integration, by its identity (the
+        state at a root found by solve_ivp may lie on either side of it): a reversal sticks
+        every slipping element, element i's event makes it slip in the direction of u."""
+        if which == 0:
+            modes[:] = 0.0
+        elif which > 0:
+            modes[which - 1] = sgn(u_of(t, y))
 
     y = np.zeros(3 + n)
     t = 0.0
@@ -124,8 +123,9 @@ def run(law, own, point, window, rtol=1e-10):
             sol = solve_ivp(rhs, (t, min(t + 1e-9, t_stop)), y, method="DOP853", rtol=rtol,
                             atol=rtol)
         t, y = float(sol.t[-1]), sol.y[:, -1].copy()
-        if law == "gms":
-            update(t, y)
+        if law == "gms" and sol.status == 1:
+            fired = [j for j, te in enumerate(sol.t_events) if len(te)]
+            update(t, y, fired[0] if fired else -1)
         stops += 1
         if x_tr is None and t >= t_tr:
             x_tr, q_tr = v_ref * t - y[0], y[-1]

@@ -8,6 +8,7 @@ that direction), a discrete mode of the contract. With the Stribeck curve
 
     stuck:     dz_i/dt = u                                until |F_i| reaches alpha_i s(u)
     slipping:  dz_i/dt = (C / k_i) (m_i alpha_i - F_i / s(u))      until u reverses
+                                              (reaches the band |u| < stick_band, a reading)
     F = sum_i F_i + sigma2 u                             (sigma2 u only with the viscous effect)
 
 A stuck element whose force grows to its share of the Stribeck curve starts slipping in the
@@ -29,7 +30,14 @@ from .. import params as P
 from ..contract import FrictionLaw, LawKernels, ModelError, Param
 from .stribeck import make_g
 
-SLIP_EDGE = 1e-12   # relative: a stuck element at |F_i| >= (1 - SLIP_EDGE) alpha_i s(u) slips
+# relative: a stuck element at |F_i| >= (1 - SLIP_EDGE) alpha_i s(u) slips. A landing on the
+# switch may stop a hair short of it (the locator's theta is exact to 1e-13 of the step; seen:
+# alpha_i s - |F_i| = 6e-13 of 0.2 left over), and the next step would then find the root at
+# its very start, too close to land on, and switch a whole step late (an overshoot of |F_i| of
+# 6 % on the dithered slider, 1e-3 in v_mean): the edge must cover what a landing leaves.
+# The same for a reversal: a landing on u = 0 may leave u a hair on the old side, so a
+# slipping element sticks once |u| < stick_band (and a stuck one slips only outside it).
+SLIP_EDGE = 1e-9
 
 
 class GMS(FrictionLaw):
@@ -110,14 +118,16 @@ class GMS(FrictionLaw):
         def update_modes(u, y, hold, p):
             changed = False
             su = s(u, p)
+            band = p[P.STICK_BAND]
             for i in range(n):
                 m = y[M + i]
                 Fi = p[ik + i] * y[Z + i]
                 if m == 0.0:
-                    if Fi * u > 0.0 and abs(Fi) >= (1.0 - SLIP_EDGE) * p[ia + i] * su:
+                    if (Fi * u > 0.0 and abs(u) >= band
+                            and abs(Fi) >= (1.0 - SLIP_EDGE) * p[ia + i] * su):
                         y[M + i] = 1.0 if u > 0.0 else -1.0
                         changed = True
-                elif m * u < 0.0:
+                elif m * u < 0.0 or abs(u) < band:
                     y[M + i] = 0.0
                     changed = True
             return changed

@@ -43,6 +43,7 @@ class MaxwellSlip(FrictionLaw):
         n, Z, M = b.size["k"], b.z0, b.m0          # sizes and offsets: compile-time constants
         ik, ia, iC = b.ix["k"], b.ix["alpha"], b.ix["C"]
         fc, fs, vs, delta, sigma2 = (b.ix[k] for k in ("fc", "fs", "vs", "delta", "sigma2"))
+        stick_band = b.ix["stick_band"]
 
         @b.jit(inline="always")
         def s(u, p):                               # the Stribeck curve
@@ -85,12 +86,14 @@ class MaxwellSlip(FrictionLaw):
         def update_modes(u, y, hold, p):
             changed = False
             su = s(u, p)
+            band = p[stick_band]       # a landing on a switch may stop a hair short of it
             for i in range(n):
                 Fi = p[ik + i] * y[Z + i]
-                if y[M + i] == 0.0 and Fi * u > 0.0 and abs(Fi) >= (1 - 1e-12) * p[ia + i] * su:
+                if (y[M + i] == 0.0 and Fi * u > 0.0 and abs(u) >= band
+                        and abs(Fi) >= (1 - 1e-9) * p[ia + i] * su):
                     y[M + i] = 1.0 if u > 0.0 else -1.0
                     changed = True
-                elif y[M + i] * u < 0.0:
+                elif y[M + i] != 0.0 and (y[M + i] * u < 0.0 or abs(u) < band):
                     y[M + i] = 0.0
                     changed = True
             return changed
