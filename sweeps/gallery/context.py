@@ -21,7 +21,7 @@ class Context:
     workers: int = 2
     client: object = None
     progress: bool = False
-    #: a deliberately wrong model for the rules' own tests (tests/gallery/test_wrong_models):
+    #: a deliberately wrong model for the rules' own tests (tests/sweeps/gallery/test_wrong_models):
     #: parameter overrides for every engine computation (simulation and averaged theory
     #: alike: a shared error), ``W_scale`` multiplying every dither amplitude the engine sees
     model: dict = field(default_factory=dict)

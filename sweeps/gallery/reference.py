@@ -12,7 +12,7 @@ friction law cannot pass both the engine and the reference.
   each by Gauss-Legendre with :data:`GAUSS_NODES` nodes (numpy's ``leggauss``), vectorised
   over ``v``. Convergence: 256 against 1024 nodes differ by < 1e-13 on Figs. 6-8's curves
   (128 nodes: 1e-11 where u touches 0, |v| = W, vd = 0.01;
-  tests/gallery/test_reference.py); against scipy's adaptive ``quad`` by < 1e-12.
+  tests/sweeps/gallery/test_reference.py); against scipy's adaptive ``quad`` by < 1e-12.
 * :func:`contact_asymptote`: the ``omega -> infinity`` friction of the Sec. 3 contact model.
 """
 from __future__ import annotations

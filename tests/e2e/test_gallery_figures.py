@@ -44,8 +44,8 @@ def test_every_figure_renders_and_the_page_is_written(gallery):
 
 def test_small_verdicts(gallery):
     """The paper model's verdicts (per reading too) at the small size: what the wrong models
-    of tests/gallery/test_wrong_models.py must change."""
-    from tests.gallery.test_wrong_models import CORRECT
+    of tests/sweeps/gallery/test_wrong_models.py must change."""
+    from tests.sweeps.gallery.test_wrong_models import CORRECT
 
     results = gallery[0]
     assert {k: (results[k].verdict, results[k].readings) for k in CORRECT} == CORRECT

@@ -18,7 +18,7 @@ from pathlib import Path
 import pytest
 
 from ..helpers import ditherlab
-from ..web.conftest import RUNNING_ID
+from ..sweeps.web.conftest import RUNNING_ID
 
 pytestmark = [pytest.mark.long, pytest.mark.browser, pytest.mark.subprocess]   # a real browser
 

@@ -8,9 +8,9 @@ import pytest
 from sweeps.cli.main import main
 from sweeps.gallery.scenes import REGISTRY, SPECS, get_scene, shrink
 
-from ..helpers import in_process
+from ...helpers import in_process
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def test_scenes_lists_every_scene_with_its_points():

@@ -3,7 +3,7 @@
 dither amplitude; ``Context.theory``: overrides for the averaged theory alone) and its
 verdict -- or, for a figure judged under several readings of an unstated value, the verdict
 of a reading -- must differ from the paper model's, pinned in CORRECT (asserted on the paper
-model by tests/gallery/test_figures.py::test_small_verdicts).
+model by tests/e2e/test_gallery_figures.py::test_small_verdicts).
 
 The wrong models: sigma1 dropped, the Stribeck exponent changed (delta 2 -> 1), the averaged
 theory's g perturbed (fs 1.5 -> 1.6), g perturbed in the engine (simulation and theory

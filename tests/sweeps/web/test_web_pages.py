@@ -12,7 +12,7 @@ import subprocess
 import psutil
 import pytest
 
-from ..helpers import BIN, ditherlab
+from ...helpers import BIN, ditherlab
 from .conftest import RUNNING_ID, request
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
