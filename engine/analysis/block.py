@@ -6,7 +6,9 @@ integration:
 * ``scene.path == "averaged"`` (slider, Secs. 5-6): ``F_eff`` = effective friction at
   slip velocity ``v_ref`` (Eq. 5.9 for LuGre; Eq. 5.14 for the static ``stribeck`` /
   ``coulomb`` laws), ``max_real_eig`` of the averaged Jacobian (Eqs. 6.4-6.7; for a
-  static law the (e, v) system ``J = [[0, -1], [1, -F']]``), ``stable`` = 1.0 when
+  static law the (e, v) system ``J = [[0, -1], [1, -F']]``; for a law that declares its
+  steady-state curve -- Dahl, GMS, a user's -- its phase average, engine.analysis.steady),
+  ``stable`` = 1.0 when
   ``max_real_eig < 0`` else 0.0. **omega is ignored**: averaging is the
   ``omega -> infinity`` limit. Dither ``none`` sets W = 0; ``sine-force`` uses the sine
   rule with velocity amplitude W (engine.analysis.quadrature).
@@ -68,10 +70,19 @@ def _effective_p(scene, p) -> np.ndarray:
 
 def _averaged(scene, W, v_ref, vd, p, n_quad, side):
     _check(scene, "system", scene.system, ("slider",), "use path='hbm' for 'contact'")
-    _check(scene, "friction", scene.friction, _AVERAGED_LAWS,
-           "the elasto-plastic law has no averaged model: use a time integrator")
     if scene.dither == "none":
         W = np.zeros_like(W)
+    if scene.friction not in _AVERAGED_LAWS + ("elastoplastic",):
+        # a law with a declared steady-state curve (Dahl, GMS, a user's): engine.analysis.steady
+        from .steady import steady_effective
+
+        F, dF = steady_effective(scene, v_ref, W, p, n_quad)
+        lam = static_max_real_eig(dF)
+        stable = np.where(np.isnan(lam), np.nan, (lam < 0).astype(float))
+        return {"F_eff": F, "max_real_eig": lam, "stable": stable}, \
+            np.full(W.size, ST.OK, np.int8)
+    _check(scene, "friction", scene.friction, _AVERAGED_LAWS,
+           "the elasto-plastic law has no averaged model: use a time integrator")
     if scene.friction == "lugre":
         _J, F, lam = linearisation(v_ref, W, p, dither=scene.dither, vd=vd, n_quad=n_quad,
                                    side=side)

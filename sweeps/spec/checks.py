@@ -12,6 +12,9 @@ from .messages import show
 from .models import Range, Spec
 
 
+PAPER_LAWS = ("coulomb", "stribeck", "lugre", "elastoplastic")   # the paper's theory covers
+
+
 def check_choices(spec: Spec) -> list[str]:
     """Faults in the combination of choices, without the grid's values."""
     problems = []
@@ -38,7 +41,15 @@ def check_choices(spec: Spec) -> list[str]:
                         "has no dither frequency; drop grid.omega (the cube's omega is inf) or "
                         "use method = 'simulate'")
     theory = {"averaged": ("coulomb", "stribeck", "lugre"), "hbm": ("lugre",)}
-    if spec.method in theory and spec.friction not in theory[spec.method]:
+    if spec.method == "averaged" and spec.friction not in PAPER_LAWS:
+        from engine import registry
+        from engine.analysis.steady import has_steady
+
+        if not has_steady(registry.law(spec.friction)):
+            problems.append(f"friction: method='averaged' needs the law's steady-state "
+                            f"friction curve (build_steady, docs/MODELS.md rule 7), and "
+                            f"{spec.friction!r} declares none; use method = 'simulate'")
+    elif spec.method in theory and spec.friction not in theory[spec.method]:
         problems.append(f"friction: method={spec.method!r} has no theory for {spec.friction!r} "
                         f"(it covers {', '.join(theory[spec.method])}); use method = 'simulate'")
     defaults = system_defaults(spec.system)

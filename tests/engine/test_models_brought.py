@@ -150,3 +150,45 @@ def test_bad_user_code_is_one_line(case, tmp_path, monkeypatch):
     assert says in lines[0], text
     assert "Traceback" not in text
     sys.modules.pop(name, None)
+
+
+def test_the_averaged_path_of_a_law_with_a_steady_curve(examples_on_path):
+    """F_eff of the brought GMS is the phase average of its steady curve (checked against
+    scipy's adaptive quad to 1e-10), and the chart's class follows the slope's sign."""
+    import numpy as np
+    from scipy.integrate import quad
+
+    from engine.analysis.block import analysis_block
+
+    own = {"k": [40.0, 100.0], "alpha": [0.4, 0.6], "C": 20.0}
+    ref = "mylab.laws:MaxwellSlip"
+    p = registry.pack(ref, "slider", own)
+    scene = Scene.from_params(p, friction=ref, dither="sine-velocity", path="averaged",
+                              outputs=("F_eff", "stable"),
+                              sizes=registry.sizes_of(ref, "slider", own))
+    pts = np.array([[W, np.inf, v, 0.1] for W in (0.0, 0.2, 0.5) for v in (0.05, 0.1, 0.3)])
+    out, status = analysis_block(scene, pts, p)
+    assert (status == 0).all()
+
+    def f_ss(u):
+        s = 1.0 + 0.5 * np.exp(-(u / 0.1) ** 2)
+        return np.sign(u) * s + 0.004 * u
+
+    for (W, _, v, _), F in zip(pts, out["F_eff"]):
+        kink = [np.arccos(-v / W)] if W > abs(v) else None
+        exact = quad(lambda phi: f_ss(v + W * np.cos(phi)), 0.0, np.pi, points=kink,
+                     epsabs=1e-13, epsrel=1e-13, limit=200)[0] / np.pi
+        assert F == pytest.approx(exact, abs=1e-10), (W, v)
+    # no dither: the Stribeck branch (v < ~0.1) falls with v (unstable), beyond it rises
+    assert out["stable"][:3].tolist() == [0.0, 0.0, 1.0]
+
+
+NO_STEADY = _law()
+
+
+def test_averaged_is_refused_for_a_law_without_a_steady_curve(tmp_path, monkeypatch):
+    (tmp_path / "nosteady.py").write_text(textwrap.dedent(NO_STEADY))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(SpecError, match="needs the law's steady-state friction curve"):
+        load_spec({"friction": "nosteady:X", "method": "averaged", "dither": "sine-velocity"})
+    sys.modules.pop("nosteady", None)

@@ -102,7 +102,8 @@ def test_gms_minor_loops_close_where_they_began():
     x, F, marks = _gms_loop([20.0, 60.0, 200.0], [0.3, 0.3, 0.4], 2000.0,
                             [0.0, 0.08, 0.05, 0.08, 0.12])
     i_rev, i_back = marks[1], marks[3]     # the reversal at 0.08 and the return to it
-    assert x[i_rev] == pytest.approx(x[i_back], abs=1e-9)
+    # the samples nearest the corners (the path is flat there: within 1e-6)
+    assert x[i_rev] == pytest.approx(x[i_back], abs=1e-6)
     scale = max(abs(F).max(), 1e-12)
     # slow driving (u ~ 1e-3): the slipping elements' forces sit on alpha_i s(u) ~ alpha_i fs
     assert abs(F[i_back] - F[i_rev]) / scale < 2e-3
