@@ -39,7 +39,7 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, worke
     t = time.perf_counter()
     with (nullcontext(client) if client is not None
           else dask_client(scheduler, workers, dashboard)) as cluster_client:
-        client = matched(cluster_client)
+        client = matched(cluster_client, [ref for ref, _ in plan.scene.digests])
         if getattr(client, "scaler", None) is not None and todo and not isinstance(workers, int):
             # batch jobs for these blocks: serve waits without any, a refined level may end some
             client.scaler.start(workers.for_blocks(len(todo)).jobs)

@@ -37,9 +37,20 @@ class WorkerCheck:
 
     def __init__(self, client):
         self.client = client
+        self.models: tuple = ()
         self.own = task.identity()
         self.seen: dict[str, dict | str] = {}   # address -> identity, or why the check failed
         self.told: set[str] = set()
+
+    def expect(self, models) -> None:
+        """The models this run brings by import path (engine.registry): a worker must also
+        import the same source of each (its digest in the identity) to get a block."""
+        models = tuple(sorted(models))
+        if models != self.models:
+            self.models = models
+            self.own = task.identity(models)
+            self.seen.clear()
+            self.told.clear()
 
     def matching(self) -> dict[str, int]:
         """Address -> threads of every connected worker that runs this engine. Workers
@@ -72,7 +83,8 @@ class WorkerCheck:
 
     def _ask(self, addresses: list[str]) -> dict[str, dict | str]:
         try:
-            got = self.client.run(task.identity, workers=addresses, on_error="return")
+            got = self.client.run(task.identity, self.models, workers=addresses,
+                                  on_error="return")
         except Exception as exc:  # noqa: BLE001 -- a worker left meanwhile: ask next time
             log.debug("worker check failed (%s); asking again", exc)
             return {}
@@ -95,6 +107,12 @@ class WorkerCheck:
         got = self.seen[address]
         if isinstance(got, str):
             return got
+        mine, theirs = self.own.get("models", {}), got.get("models", {})
+        for ref in mine:
+            if got["fingerprint"] == self.own["fingerprint"] and theirs.get(ref) != mine[ref]:
+                where = (f"source {theirs[ref]}" if theirs.get(ref) else "no copy")
+                return (f"has another copy of {ref} ({where}; this submitter's source is "
+                        f"{mine[ref]})")
         return f"runs results fingerprint {got['fingerprint']} (ditherlab {got['version']})"
 
 
@@ -123,8 +141,12 @@ class MatchedClient:
         return self.client.run(*args, workers=list(workers or self.check.wait()), **kwargs)
 
 
-def matched(client):
-    """``client`` as a :class:`MatchedClient` (itself if it is one already; None stays None)."""
-    if client is None or isinstance(client, MatchedClient):
+def matched(client, models=()):
+    """``client`` as a :class:`MatchedClient` (itself if it is one already; None stays None),
+    expecting ``models``: the import paths of the run's brought models (WorkerCheck.expect)."""
+    if client is None:
         return client
-    return MatchedClient(client)
+    if not isinstance(client, MatchedClient):
+        client = MatchedClient(client)
+    client.check.expect(models)
+    return client

@@ -72,12 +72,18 @@ def output_shapes(outputs) -> dict[str, tuple]:
     return {name: (N_HIST,) if name == "alpha_hist" else () for name in outputs}
 
 
-def identity() -> dict:
+def identity(models: tuple = ()) -> dict:
     """What a worker runs: its results fingerprint and ditherlab version, computed from
-    the modules this process imports (run on each worker as it joins: sweeps.workers.matching)."""
+    the modules this process imports (run on each worker as it joins: sweeps.workers.matching),
+    and for the models a sweep brings by import path (``models``), the source digest of the
+    copy this process would import (None: it has none)."""
     from ..version import __version__
 
-    return {"fingerprint": _fingerprint(), "version": __version__}
+    out = {"fingerprint": _fingerprint(), "version": __version__}
+    if models:
+        from engine import registry
+        out["models"] = {ref: registry.source_digest(ref) for ref in models}
+    return out
 
 
 def _fingerprint() -> str:
