@@ -44,11 +44,11 @@ def _token_option(p) -> None:
 def _prepare(root, bind: str, token_file: str | None, option: str):
     """Check the address and token before anything listens; returns ``(ctx, host, port,
     the line to print)``."""
-    from ..web.app import Context
+    from ..web.app import ServerState
 
     host, port = parse_bind(bind, option)
     token, generated = server_token(host, token_file)
-    ctx = Context(root, token=token)
+    ctx = ServerState(root, token=token)
     shown = f"[{host}]" if ":" in host else host
     link = f"http://{shown}:{{port}}/"
     if generated:

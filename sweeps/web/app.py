@@ -1,4 +1,4 @@
-"""The web view's application: its routes, the shared state of one server (:class:`Context`)
+"""The web view's application: its routes, the shared state of one server (:class:`ServerState`)
 and starting it (:func:`start`, in the calling thread's event loop or a thread of its own).
 
 Every route is a fixed pattern; a sweep id must be 12 hex digits and is then looked up in
@@ -30,7 +30,7 @@ PLANS = 256   # plan summaries kept (each a few hundred bytes)
 log = logging.getLogger("ditherlab")
 
 
-class Context:
+class ServerState:
     """What the handlers of one server share: the store, its live catalogue, cubes read,
     maps drawn, the explorer, the token (None on loopback without one), the gallery."""
 
@@ -73,7 +73,7 @@ def _log_request(handler) -> None:
               1000 * req.request_time())
 
 
-def make_app(ctx: Context) -> tornado.web.Application:
+def make_app(ctx: ServerState) -> tornado.web.Application:
     c = {"ctx": ctx}
     routes = [
         (r"/", pages.Catalogue, c),
@@ -97,7 +97,7 @@ def make_app(ctx: Context) -> tornado.web.Application:
                                    xsrf_cookies=False, compress_response=False)
 
 
-def start(ctx: Context, host: str, port: int):
+def start(ctx: ServerState, host: str, port: int):
     """Listen on ``host:port`` in the current event loop; returns the HTTP server (its
     bound port: ``server_port(server)``)."""
     from tornado.httpserver import HTTPServer
@@ -113,7 +113,7 @@ def server_port(server) -> int:
     return next(iter(server._sockets.values())).getsockname()[1]
 
 
-def start_in_thread(ctx: Context, host: str, port: int) -> tuple[int, callable]:
+def start_in_thread(ctx: ServerState, host: str, port: int) -> tuple[int, callable]:
     """Run the server in a daemon thread with its own event loop (``serve --web``, tests):
     returns ``(bound port, stop)``."""
     import asyncio

@@ -68,7 +68,7 @@ def running(web_store):
 
 @pytest.fixture
 def serve_ctx():
-    """Start a server on a free loopback port for a Context; returns its base URL."""
+    """Start a server on a free loopback port for a ServerState; returns its base URL."""
     from sweeps.web.app import start_in_thread
 
     stops = []
@@ -85,9 +85,9 @@ def serve_ctx():
 
 @pytest.fixture
 def server(web_store, serve_ctx):
-    from sweeps.web.app import Context
+    from sweeps.web.app import ServerState
 
-    ctx = Context(web_store["root"])
+    ctx = ServerState(web_store["root"])
     return serve_ctx(ctx), ctx
 
 

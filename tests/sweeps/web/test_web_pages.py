@@ -134,21 +134,21 @@ def test_every_socket_of_web_and_serve_web_is_on_loopback(web_store, cmd, marker
 
 
 def test_a_gallery_folder_is_served_by_name_only(web_store, serve_ctx, tmp_path):
-    from sweeps.web.app import Context
+    from sweeps.web.app import ServerState
 
     gallery = tmp_path / "gallery"
     gallery.mkdir()
     (gallery / "index.html").write_text("<style>p{}</style><p>gallery</p><img src='fig09.png'>")
     (gallery / "fig09.png").write_bytes(b"\x89PNG fake")
     (gallery / "leak.png").symlink_to(web_store["root"] / "catalogue.sqlite")
-    base = serve_ctx(Context(web_store["root"], gallery=str(gallery)))
+    base = serve_ctx(ServerState(web_store["root"], gallery=str(gallery)))
     status, headers, body = request(base, "/gallery/")
     assert status == 200 and b"<p>gallery</p>" in body
     assert "script-src 'self';" in headers["Content-Security-Policy"]   # its styles only
     assert request(base, "/gallery/fig09.png")[2] == b"\x89PNG fake"
     assert request(base, "/gallery/leak.png")[0] == 404
     assert request(base, "/gallery/missing.png")[0] == 404
-    assert request(serve_ctx(Context(web_store["root"])), "/gallery/")[0] == 404
+    assert request(serve_ctx(ServerState(web_store["root"])), "/gallery/")[0] == 404
 
 
 @pytest.mark.long

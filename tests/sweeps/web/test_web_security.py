@@ -63,7 +63,7 @@ def test_no_address_becomes_a_path(server, web_store, path):
 
 
 def test_a_read_only_store_is_served_and_no_request_writes(web_store, serve_ctx, read_only):
-    from sweeps.web.app import Context
+    from sweeps.web.app import ServerState
 
     ro = read_only(web_store["root"])
     # earlier tests' catalogue connections, left to the garbage collector, close now: the
@@ -71,7 +71,7 @@ def test_a_read_only_store_is_served_and_no_request_writes(web_store, serve_ctx,
     # which once happened mid-test (the comparison below failed on that, not on a request)
     gc.collect()
     before = _files(web_store["root"])
-    base = serve_ctx(Context(ro))
+    base = serve_ctx(ServerState(ro))
     sid = web_store["avg"]
     for path in ("/", "/api/sweeps?after=0", f"/sweep/{sid}", f"/api/sweep/{sid}",
                  f"/sweep/{sid}/cube.nc", f"/sweep/{sid}/query.csv?sel.v_d=0.1",
@@ -180,9 +180,9 @@ TOKEN = "t0k3n-" + "x" * 40
 
 
 def test_a_token_is_needed_compared_and_never_logged(web_store, serve_ctx, caplog):
-    from sweeps.web.app import Context
+    from sweeps.web.app import ServerState
 
-    base = serve_ctx(Context(web_store["root"], token=TOKEN))
+    base = serve_ctx(ServerState(web_store["root"], token=TOKEN))
     caplog.set_level(logging.DEBUG, logger="ditherlab")   # the access log's logger
     assert request(base, "/")[0] == 401
     assert request(base, "/", headers={"Authorization": "Bearer " + "y" * len(TOKEN)})[0] == 401
@@ -224,13 +224,13 @@ def test_a_cube_of_another_sweep_is_refused_without_the_servers_folders(web_stor
     """A sweep folder holding another sweep's cube (copied by hand) is a 409 that names
     both sweeps and the folder inside the store, not where the store lives (it did:
     'the cube at /tmp/.../store/<id>/cube.nc is sweep ...')."""
-    from sweeps.web.app import Context
+    from sweeps.web.app import ServerState
 
     root = tmp_path / "copy"
     shutil.copytree(web_store["root"], root)
     avg, tiny = web_store["avg"], web_store["tiny"]
     shutil.copyfile(root / tiny / "cube.nc", root / avg / "cube.nc")
-    base = serve_ctx(Context(root))
+    base = serve_ctx(ServerState(root))
     for path in (f"/sweep/{avg}", f"/sweep/{avg}/cube.nc"):
         status, _, body = request(base, path)
         text = body.decode()
