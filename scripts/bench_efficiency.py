@@ -86,7 +86,8 @@ class Stamped:   # the progress display's redraws, timed (tqdm writes to sys.std
 
 spec, root, workers = json.loads(sys.argv[1]), sys.argv[2], int(sys.argv[3])
 plan = make_plan(load_spec(spec))
-shown, sys.stderr = Stamped(), Stamped()
+shown = Stamped()
+sys.stderr = shown
 t1 = time.perf_counter()
 res = submit(plan, root, workers=workers, progress=True)
 t2 = time.perf_counter()
@@ -129,7 +130,8 @@ def one(spec, workers: int, cold: bool, tree: Path = ROOT) -> dict:
         t = time.perf_counter()
         proc = subprocess.run([sys.executable, "-c", CHILD, json.dumps(spec),
                                str(Path(tmp) / "store"), str(workers)],
-                              capture_output=True, text=True, env=env, timeout=3600)
+                              capture_output=True, text=True, env=env, timeout=3600,
+                              cwd=tmp)   # (python -c puts its folder first on sys.path)
         wall = time.perf_counter() - t
     if proc.returncode != 0:
         raise SystemExit(f"bench_efficiency: the submit failed: "

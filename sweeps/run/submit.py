@@ -179,12 +179,13 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
         result = final_result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run,
                               t0=t0, timings=timings, lease=lease, stopped=sink.stopped,
                               max_blocks=max_blocks)
-    finally:
+    except BaseException:
         if early is not None:
-            phases.say(plan, "stopping the local cluster", progress)
-            t = time.perf_counter()
             early.close()
-            timings["stop_s"] = time.perf_counter() - t
+        raise
+    if early is not None:   # the result is reported first (the process waits at its exit)
+        phases.say(plan, "stopping the local cluster", progress)
+        early.close_later()
     log.debug("sweep %s timings: %s", plan.sweep_id,
               ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()) or "-")
     return result

@@ -2,6 +2,7 @@
 workers ignoring Ctrl-C (the submitter stops them cleanly; sweeps.run.submit)."""
 from __future__ import annotations
 
+import atexit
 import logging
 import signal
 import threading
@@ -139,6 +140,18 @@ class EarlyStart:
             raise self._error
         return self._client
 
+    def close_later(self) -> None:
+        """Close the cluster on a thread, so the caller reports its result first; the
+        process waits for it at its exit, ignoring Ctrl-C meanwhile (:func:`_wait_for_stops`:
+        the workers are stopping anyway, and a traceback would be the last thing shown)."""
+        self._restore_sigint()   # on this (main) thread: the closing thread cannot
+        thread = threading.Thread(target=self.close, daemon=True, name="ditherlab-cluster-stop")
+        thread.start()
+        with _STOPPING_LOCK:
+            if not _STOPPING:
+                atexit.register(_wait_for_stops)
+            _STOPPING.append(thread)
+
     def close(self) -> None:
         """Close the cluster (a warm-up still running ends with it)."""
         self._up.wait()
@@ -147,6 +160,32 @@ class EarlyStart:
             self._closing = True
             self._cm.__exit__(None, None, None)
         self._thread.join()
+
+
+_STOPPING: list[threading.Thread] = []   # clusters closing in the background (close_later)
+_STOPPING_LOCK = threading.Lock()
+
+
+def wait_for_stops() -> None:
+    """Wait until every cluster handed to :meth:`EarlyStart.close_later` is closed."""
+    with _STOPPING_LOCK:
+        threads = list(_STOPPING)
+    for thread in threads:
+        thread.join()
+    with _STOPPING_LOCK:
+        _STOPPING[:] = [t for t in _STOPPING if t.is_alive()]
+
+
+def _wait_for_stops() -> None:
+    """At exit: the background stops end before the process does (their workers with
+    them), with Ctrl-C ignored on the main thread meanwhile."""
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        wait_for_stops()
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, previous if previous is not None else signal.SIG_DFL)
 
 
 @contextmanager

@@ -25,6 +25,7 @@ from sweeps.run.submit import small, submit
 from sweeps.spec import load_spec, parse_spec
 from sweeps.workers import task
 from sweeps.workers.block_gate import RERUN_GATE_ENV
+from sweeps.workers.cluster import wait_for_stops
 from sweeps.workers.task import block_key
 from sweeps.workers.threads import ThreadClient
 
@@ -123,6 +124,10 @@ def test_threads_write_the_cube_a_local_cluster_writes(tmp_path, monkeypatch):
     monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
     cluster = submit(make_plan(parse_spec(SPEC)), tmp_path / "cluster", progress=False)
     assert "cluster_s" in cluster.timings, cluster.timings
+    # the result came back before the cluster stopped; the stop ends on its own thread
+    stopping = [t for t in threading.enumerate() if t.name == "ditherlab-cluster-stop"]
+    wait_for_stops()
+    assert stopping and not any(t.is_alive() for t in stopping)
     assert threads.state == cluster.state == "done"
     a, b = _results(threads.cube_path), _results(cluster.cube_path)
     estimate = json.loads(store.read_cube(threads.cube_path).attrs["error_estimate"])
