@@ -5,7 +5,6 @@ kernels release the GIL, so the threads compute side by side; the same task, jou
 checks and order as on a cluster (sweeps.run.dispatch)."""
 from __future__ import annotations
 
-import sys
 import threading
 import time
 
@@ -13,7 +12,7 @@ from ..workers import task
 from ..workers.cluster import NOTICE_AFTER_S
 from ..workers.threads import ThreadClient
 from ..planning.plan import Plan, work_s
-from . import interrupt
+from . import interrupt, phases
 from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun_first,
                        show_reruns)
 from .sink import BlockSink
@@ -27,15 +26,14 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=
     cost of starting a cluster (sweeps.run.submit.small). The same task, journal and
     checks as on a cluster, the same longest-first order, the error sample's re-runs
     (``sample``) among the blocks; the kernel is compiled once first (``warm_up``)."""
-    bar = points_bar(plan, todo, progress)
     threads = workers if isinstance(workers, int) else 2
     with ThreadClient(threads) as pool:
         if plan.path == "simulate" and warm_up:
             t = time.perf_counter()
             if not _warm_up_here(plan, sink, progress):
-                bar.close()
                 return
             timings["warm_up_s"] = time.perf_counter() - t
+        bar = points_bar(plan, todo, progress)   # its clock starts with the points
         t = time.perf_counter()
         sink.started()
         _dispatch_local(pool, plan, todo, sink, bar, sample)
@@ -48,21 +46,22 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=
 def _warm_up_here(plan: Plan, sink: BlockSink, progress: bool) -> bool:
     """Compile the kernel in this process, on a daemon thread (a Ctrl-C or a cancel during
     a first compilation, which cannot be interrupted, leaves it behind instead of waiting
-    for it), saying so after NOTICE_AFTER_S; False if ``sink.should_stop()`` turned true
-    meanwhile."""
+    for it), saying so after NOTICE_AFTER_S (phases.Compiling); False if
+    ``sink.should_stop()`` turned true meanwhile."""
     thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-compile",
                               args=(plan.scene, plan.params, plan.numerics.settings))
     thread.start()
-    t0 = time.monotonic()
-    while thread.is_alive():
-        thread.join(0.1)
-        interrupt.check()
-        if thread.is_alive() and sink.should_stop():
-            return False
-        if progress and t0 is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
-            print("ditherlab: compiling the engine for this scene (its first run here; "
-                  "cached for later runs)", file=sys.stderr, flush=True)
-            t0 = None
+    t0, compiling = time.monotonic(), phases.Compiling(progress)
+    try:
+        while thread.is_alive():
+            thread.join(0.1)
+            interrupt.check()
+            if thread.is_alive() and sink.should_stop():
+                return False
+            if time.monotonic() - t0 > NOTICE_AFTER_S:
+                compiling()
+    finally:
+        compiling.close()
     return True
 
 

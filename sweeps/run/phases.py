@@ -51,3 +51,30 @@ def say(plan, phase: str, enabled: bool) -> None:
     """One line naming a phase without a count (publishing the cube)."""
     if enabled:
         print(f"{plan.spec.name} [{plan.sweep_id}] {phase}", file=sys.stderr, flush=True)
+
+
+class Compiling:
+    """Called while a kernel is compiled or loaded (sweeps.run.local, the cluster's
+    warm-up), after NOTICE_AFTER_S: the first call shows a line that says a first run of
+    this scene compiles it (a timer, redrawn every REDRAW_S: a compilation takes seconds to
+    a minute), the next calls keep it alive; :meth:`close` ends it. Nothing when not
+    ``enabled``."""
+
+    TEXT = ("ditherlab: compiling the engine for this scene (its first run here; cached for "
+            "later runs)")
+
+    def __init__(self, enabled: bool):
+        self.enabled, self._bar = enabled, None
+
+    def __call__(self) -> None:
+        if not self.enabled:
+            return
+        if self._bar is None:
+            self._bar = _bar_class()(desc=self.TEXT, bar_format="{desc} {elapsed}",
+                                     mininterval=MININTERVAL_S)
+        self._bar.keep_alive()
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None

@@ -151,7 +151,9 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                 # drawn from the sweep id): no tail of re-runs after the last block
                 extra["sample"] = SampleRuns(plan)
             if early is not None:   # its workers are warm: the kernel compiled there
-                client = early.client(sink.should_stop, _compiling if progress else None)
+                compiling = phases.Compiling(progress)
+                client = early.client(sink.should_stop, compiling)
+                compiling.close()
                 extra["warm_up"] = False
             waited = time.perf_counter() - t
             if early is None or client is not None:   # else stopped while it started
@@ -215,11 +217,6 @@ def overlaps_estimate(plan: Plan, sweep) -> bool:
     dispatched with its blocks (a refined sweep gives them to its levels' tails)."""
     return plan.path == "simulate" and not plan.spec.refine and \
         not (sweep.root / ESTIMATE_FILE).exists()
-
-
-def _compiling() -> None:
-    print("ditherlab: compiling the engine for this scene on the workers (its first run "
-          "here; cached for later runs)", file=sys.stderr, flush=True)
 
 
 def _checked_blocks(plan: Plan):

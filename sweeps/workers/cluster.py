@@ -116,7 +116,6 @@ class EarlyStart:
                 return False
             if notice is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
                 notice()
-                notice = None
             time.sleep(0.05)
         return True
 
@@ -129,8 +128,8 @@ class EarlyStart:
     def client(self, should_stop=lambda: False, notice=None):
         """The client once its workers are warm; None if ``should_stop()`` turned true
         while waiting (a first compilation can take a minute on a busy machine). Calls
-        ``notice()`` once if the wait exceeds NOTICE_AFTER_S. Raises what the start
-        raised (ClusterStartError)."""
+        ``notice()`` every 50 ms once the wait exceeds NOTICE_AFTER_S (a display that
+        says so and stays alive). Raises what the start raised (ClusterStartError)."""
         if not self._wait(self._up.is_set, should_stop, None):
             return None
         self._restore_sigint()
