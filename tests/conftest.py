@@ -17,8 +17,12 @@
 from __future__ import annotations
 
 import pathlib
+import subprocess
+from pathlib import Path
 
 import pytest
+
+from .guarantee import skip_unless_ci
 
 HERE = pathlib.Path(__file__).parent
 
@@ -42,3 +46,58 @@ def pytest_collection_modifyitems(config, items):
 def pytest_report_header(config):
     if not (config.getoption("markexpr") or "").strip():
         return "long tests deselected: `scripts/test -m long` runs them (.ci/run does)"
+
+
+# --- mounts: a small disk and a read-only store (root only; tests/guarantee.py) ----------
+
+def _mount(args: list[str], where: Path) -> None:
+    where.mkdir(parents=True, exist_ok=True)
+    proc = subprocess.run(["mount", *args, str(where)], capture_output=True, text=True)
+    if proc.returncode != 0:
+        skip_unless_ci(f"cannot mount here ({' '.join(args)}): "
+                       f"{proc.stderr.strip() or 'not root'}")
+
+
+def _umount(where: Path) -> None:
+    # lazy: this process may still hold the catalogue open
+    subprocess.run(["umount", "--lazy", str(where)], capture_output=True)
+
+
+@pytest.fixture
+def tmpfs(tmp_path):
+    """A tmpfs of a given size: ``mount("1M") -> its folder`` (a disk to fill)."""
+    mounted = []
+
+    def mount(size: str) -> Path:
+        where = tmp_path / f"disk-{size}"
+        _mount(["-t", "tmpfs", "-o", f"size={size}", "tmpfs"], where)
+        mounted.append(where)
+        return where
+
+    yield mount
+    for where in mounted:
+        _umount(where)
+
+
+@pytest.fixture
+def read_only(tmp_path):
+    """A read-only bind mount of a folder: ``mount(folder) -> the mounted path``."""
+    mounted = []
+
+    def mount(folder: Path) -> Path:
+        where = tmp_path / f"ro-{folder.name}"
+        where.mkdir()
+        proc = subprocess.run(["mount", "--bind", str(folder), str(where)], capture_output=True,
+                              text=True)
+        if proc.returncode != 0:
+            skip_unless_ci(f"cannot bind-mount here: {proc.stderr.strip()}")
+        mounted.append(where)
+        proc = subprocess.run(["mount", "-o", "remount,bind,ro", str(where)],
+                              capture_output=True, text=True)
+        if proc.returncode != 0:
+            skip_unless_ci(f"cannot remount read-only here: {proc.stderr.strip()}")
+        return where
+
+    yield mount
+    for where in mounted:
+        _umount(where)

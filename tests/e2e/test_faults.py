@@ -21,7 +21,6 @@ from sweeps.planning.plan import make_plan
 from sweeps.run.submit import submit
 from sweeps.spec import load_spec
 
-from ..guarantee import skip_unless_ci
 from ..helpers import AVERAGED_SPEC, BIN, as_a_terminal_job, ditherlab, wait_for
 
 from .test_cluster_and_resume import RESUME_SPEC
@@ -60,57 +59,6 @@ def avg(tmp_path_factory):
     clean = folder / "clean"
     ditherlab("submit", str(path), "--quiet", store=clean, check=True)
     return path, load_spec(path), clean
-
-
-def _mount(args: list[str], where: Path) -> None:
-    where.mkdir(parents=True, exist_ok=True)
-    proc = subprocess.run(["mount", *args, str(where)], capture_output=True, text=True)
-    if proc.returncode != 0:
-        skip_unless_ci(f"cannot mount here ({' '.join(args)}): "
-                       f"{proc.stderr.strip() or 'not root'}")
-
-
-def _umount(where: Path) -> None:
-    # lazy: this process may still hold the catalogue open
-    subprocess.run(["umount", "--lazy", str(where)], capture_output=True)
-
-
-@pytest.fixture
-def tmpfs(tmp_path):
-    mounted = []
-
-    def mount(size: str) -> Path:
-        where = tmp_path / f"disk-{size}"
-        _mount(["-t", "tmpfs", "-o", f"size={size}", "tmpfs"], where)
-        mounted.append(where)
-        return where
-
-    yield mount
-    for where in mounted:
-        _umount(where)
-
-
-@pytest.fixture
-def read_only(tmp_path):
-    mounted = []
-
-    def mount(folder: Path) -> Path:
-        where = tmp_path / f"ro-{folder.name}"
-        where.mkdir()
-        proc = subprocess.run(["mount", "--bind", str(folder), str(where)], capture_output=True,
-                              text=True)
-        if proc.returncode != 0:
-            skip_unless_ci(f"cannot bind-mount here: {proc.stderr.strip()}")
-        mounted.append(where)
-        proc = subprocess.run(["mount", "-o", "remount,bind,ro", str(where)],
-                              capture_output=True, text=True)
-        if proc.returncode != 0:
-            skip_unless_ci(f"cannot remount read-only here: {proc.stderr.strip()}")
-        return where
-
-    yield mount
-    for where in mounted:
-        _umount(where)
 
 
 # --- 1, 2: the cube disagrees with the journal ------------------------------------------

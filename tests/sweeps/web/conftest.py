@@ -7,7 +7,6 @@ from __future__ import annotations
 import http.client
 import json
 import os
-import subprocess
 from pathlib import Path
 
 import pytest
@@ -106,24 +105,3 @@ def request(base: str, path: str, method: str = "GET", headers=None, body=None):
         return resp.status, dict(resp.getheaders()), resp.read()
     finally:
         con.close()
-
-
-@pytest.fixture
-def read_only(tmp_path):
-    """A read-only bind mount of a folder (root only; skipped where mounts are refused)."""
-    mounted = []
-
-    def mount(folder: Path) -> Path:
-        where = tmp_path / f"ro-{folder.name}"
-        where.mkdir()
-        for args in (["--bind", str(folder)], ["-o", "remount,bind,ro"]):
-            proc = subprocess.run(["mount", *args, str(where)], capture_output=True, text=True)
-            if proc.returncode != 0:
-                pytest.skip(f"cannot make a read-only mount here: {proc.stderr.strip()}")
-            if args[0] == "--bind":
-                mounted.append(where)
-        return where
-
-    yield mount
-    for where in mounted:
-        subprocess.run(["umount", "--lazy", str(where)], capture_output=True)
