@@ -58,7 +58,7 @@ query
     ``zone_map``, ``stability_chart``, ``effective_friction_curve``, ``table``,
     ``select``; labels ``STABLE, PU, SU, NO_DATA``.
 maps
-    ``stability_map``, ``stick_slip_map``, ``friction_curves`` (PNG files).
+    ``stability_map``, ``stick_slip_map``, ``hunting_map``, ``friction_curves`` (PNG files).
 layout / atomic / errors / attrs
     ``SweepDir(store_root, sweep_id)``, ``ENV_STORE``/``DEFAULT_STORE`` (the default
     store, sweeps.lookup.store_root); ``atomic_write``;
@@ -88,7 +88,7 @@ __getattr__, __dir__, __all__ = _lazy.attach(
         "layout": ["SweepDir"],
         "points": ["fill", "status_counts"],
         "axes": ["FIGURE_FORMATS", "figure_format"],
-        "maps": ["friction_curves", "stability_map",
+        "maps": ["friction_curves", "hunting_map", "stability_map",
                  "stick_slip_map"],
         "query": ["NO_DATA", "PU", "STABLE", "SU", "effective_friction_curve", "select",
                   "stability_chart", "table", "zone_map"],

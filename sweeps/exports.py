@@ -29,6 +29,7 @@ MAPS = {
     "stick-slip": MapKind(("W", "omega"), None, ("long_stick_fraction",), "stick_slip_map"),
     "stability": MapKind(("v_ref", "W"), None, ("stable", "max_real_eig"), "stability_map"),
     "friction": MapKind(("v_ref",), "W", ("F_eff", "F_mean"), "friction_curves"),
+    "hunting": MapKind(("W", "omega"), None, ("hunt_amplitude",), "hunting_map"),
 }
 
 

@@ -45,9 +45,12 @@ class MaxwellSlip(FrictionLaw):
         fc, fs, vs, delta, sigma2 = (b.ix[k] for k in ("fc", "fs", "vs", "delta", "sigma2"))
         stick_band = b.ix["stick_band"]
 
+        square = b.scene.delta == 2.0              # delta = 2 known at compile time: no pow
+
         @b.jit(inline="always")
         def s(u, p):                               # the Stribeck curve
-            return p[fc] + (p[fs] - p[fc]) * math.exp(-abs(u / p[vs]) ** p[delta])
+            x = u / p[vs]
+            return p[fc] + (p[fs] - p[fc]) * math.exp(-(x * x if square else abs(x) ** p[delta]))
 
         @b.jit(inline="always")
         def force_of(u, y, p):

@@ -1,0 +1,64 @@
+"""Bad user code through the command line (issue 35): `ditherlab plan` and `submit` of a spec
+naming a broken law end in one line on stderr, exit 2, and write nothing to the store."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+pytestmark = [pytest.mark.subprocess]
+
+BIN = Path(sys.executable).parent / "ditherlab"
+BROKEN = {
+    "does_not_import": "import no_such_package_anywhere\n",
+    "cannot_compile": '''
+from engine.contract import FrictionLaw, LawKernels
+
+class X(FrictionLaw):
+    name = "x"
+
+    def build(self, b):
+        Z = b.z0
+
+        @b.jit(inline="always")
+        def rates(u, y, dy, hold, p):
+            dy[Z] = u
+            return {"force": u}
+
+        @b.jit(inline="always")
+        def force(u, y, hold, p):
+            return y[Z], 1.0
+
+        @b.jit(inline="always")
+        def init(p, y):
+            y[Z] = 0.0
+
+        return LawKernels(rates, force, 0, None, init, init)
+''',
+}
+
+
+@pytest.mark.parametrize("command", ["plan", "submit"])
+@pytest.mark.parametrize("module", sorted(BROKEN))
+def test_bad_user_code_is_one_line_exit_2_and_nothing_written(tmp_path, module, command):
+    (tmp_path / f"{module}.py").write_text(BROKEN[module])
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"friction": f"{module}:X", "dither": "none",
+                                "outputs": ["v_mean"], "time": {"t_end": 2.0,
+                                                                "t_transient": 1.0}}))
+    store = tmp_path / "store"
+    out = subprocess.run([str(BIN), command, str(spec), "--store", str(store)], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 2, out.stderr
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert "Traceback" not in out.stderr
+    assert module in out.stderr, out.stderr
+    what = "cannot import" if module == "does_not_import" else "numba cannot compile"
+    assert any(what in ln for ln in lines), out.stderr
+    if module == "cannot_compile":
+        assert f"{module}.py line" in out.stderr, out.stderr
+    assert len(lines) <= 2, out.stderr        # "invalid sweep spec:" and its one fault
+    assert not store.exists() or not any(store.rglob("*.nc")), "something was written"
