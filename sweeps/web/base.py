@@ -65,7 +65,7 @@ class Base(tornado.web.RequestHandler):
             self.set_status(status)
             sentence = str(exc)
         elif isinstance(exc, HTTPError) and exc.log_message:
-            sentence = exc.log_message
+            sentence = exc.log_message % exc.args   # tornado doubled a bare '%'; undone
         else:
             sentence = SENTENCES.get(status_code, responses.get(status_code, "error"))
         self.set_header("Content-Type", "text/plain; charset=utf-8")

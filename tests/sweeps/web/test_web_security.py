@@ -113,6 +113,13 @@ def test_oversized_work_is_refused_in_one_sentence(server, web_store, monkeypatc
     assert status == 400 and body.count(b"\n") == 1
 
 
+def test_a_refusal_echoes_what_was_sent_exactly(server, web_store):
+    """An HTTPError's sentence is the body as written (tornado stores a bare '%' doubled)."""
+    base, _ = server
+    status, _, body = request(base, f"/sweep/{web_store['avg']}/query.csv?var=50%25")
+    assert status == 400 and body == b"var: the cube has no variable '50%'\n", body
+
+
 def test_map_renders_beyond_the_cap_are_refused_not_queued(server, web_store):
     """The render queue is full (its slots held by the test, not by timing): 503."""
     from concurrent.futures import Future
