@@ -88,7 +88,7 @@ class LawKernels(NamedTuple):
     switches: Callable | None  # switches(u, y, hold, p, g): g[:n_switches]
     init: Callable           # init(p, y): the law's states (and modes) at t = 0
     scales: Callable         # scales(p, out): natural scale of each law state, out[z0 + i]
-    update_modes: Callable | None = None  # update_modes(u, y, hold, p) -> bool (changed)
+    update_modes: Callable | None = None  # update_modes(u, y, hold, p, landed) -> changed
 
 
 class SystemKernels(NamedTuple):

@@ -95,7 +95,8 @@ def run(law, own, point, window, rtol=1e-10):
                 def slip(t, y, i=i):
                     if modes[i] != 0:
                         return 1.0
-                    return a[i] * stribeck(u_of(t, y), q) - abs(k[i] * y[2 + i])
+                    u = u_of(t, y)   # its force in the direction of u reaching its share
+                    return a[i] * stribeck(u, q) - sgn(u) * k[i] * y[2 + i]
                 out.append(slip)
         for ev in out:
             ev.terminal = True

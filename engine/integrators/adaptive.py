@@ -31,8 +31,9 @@ next step size; this driver does everything else, identically for every method.
   LuGre hard cases (tests/hard) DP5's results are unchanged, RODAS's within 1e-8 of the
   scipy references as before.)
 - Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
-  law's ``update_modes`` reads the step-end state (which a landing put on the far side of the
-  switch); when a mode changed, the switching functions are evaluated anew and cached stages
+  law's ``update_modes`` gets the step-end state and the index of the switch the step landed
+  on (-1: none; a landing may stop a hair short of its root, so the index, not the sign of
+  the switching function there, says that it was reached); when a mode changed, the switching functions are evaluated anew and cached stages
   refreshed as after a dither switch.
 - ``FAILED`` once accepted plus rejected steps reach ``cfg.max_steps`` or the step
   underflows (``h < 1e-14 max(1, |t|)``); ``NON_FINITE`` when it underflows because the
@@ -79,7 +80,7 @@ W_METHOD = 4          # the method's own slots start here
 
 
 @njit(inline="always", error_model="numpy", refcount=False)
-def _no_modes(t, y, p, sq):
+def _no_modes(t, y, p, sq, landed):
     """The mode hook of a law without modes (never called)."""
     return False
 
@@ -138,7 +139,8 @@ def make_stepper(problem, method: Method) -> Stepper:
     @njit(inline="always", error_model="numpy", refcount=False)
     def land(t, hh, err, y, p, sq, work, rtol, atol, ctr):
         """After an accepted trial of size hh: if an event changed sign inside it, retake
-        the step so that it ends on the earliest root. Returns (hh, err, retaken)."""
+        the step so that it ends on the earliest root. Returns (hh, err, landed): the index
+        of the event the retaken step ends on, -1 when it was not retaken."""
         mw, Q, Y, G, st = work
         yn, ytmp = Y[0], Y[2]
         events(t + hh, yn, p, sq, G[1])
@@ -149,13 +151,13 @@ def make_stepper(problem, method: Method) -> Stepper:
             coeffs(y, yn, mw, Q)
             th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[3], G[4])
             if not th_b < 1.0:
-                return hh, err, False
+                return hh, err, -1
             th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b)
         else:
-            return hh, err, False
+            return hh, err, -1
         if not (EVENT_MARGIN < th < 1.0 - EVENT_MARGIN
                 and th * hh > LANDING_FLOOR * max(1.0, abs(t))):
-            return hh, err, False
+            return hh, err, -1
         ctr[CTR_REJECTED] += 1
         hh = th * hh
         ctr[CTR_EVALS] += attempt_evals
@@ -170,7 +172,7 @@ def make_stepper(problem, method: Method) -> Stepper:
                 if st[W_SHORT] > MAX_SHORT:
                     G[1, idx] = 0.0   # unreachable: mute it for the next step
                     st[W_SHORT] = 0.0
-        return hh, err, True
+        return hh, err, idx
 
     # inlined into the driver's loop over stops (engine.integrators.driver): on the anchor
     # scenes every half-period is one step, and the call per segment (work tuple, config
@@ -201,9 +203,10 @@ def make_stepper(problem, method: Method) -> Stepper:
                     st[W_H] = h
                     return S.FAILED
                 hh_trial, err_trial = hh, err
+                landed = -1
                 if err <= 1.0 and n_ev:
-                    hh, err, retaken = land(t, hh, err, y, p, sq, work, rtol, atol, ctr)
-                    last = last and not retaken
+                    hh, err, landed = land(t, hh, err, y, p, sq, work, rtol, atol, ctr)
+                    last = last and landed < 0
                 if err <= 1.0:
                     break
                 ctr[CTR_REJECTED] += 1
@@ -228,7 +231,7 @@ def make_stepper(problem, method: Method) -> Stepper:
             advance(mw)
             for i in range(n_ev):
                 G[0, i] = G[1, i]
-            if modal and update_modes(t_new, y, p, sq):
+            if modal and update_modes(t_new, y, p, sq, landed):
                 # a mode changed (an element stuck or slipped, on the switch just landed
                 # on): the right-hand side and the switching functions changed with it
                 if n_ev:

@@ -62,9 +62,10 @@ class Problem(NamedTuple):
     graze: bool = False    # events mark jumps of rhs: probe steps for grazing crossings
     sampling: bool = False # call sample at the instants k * cfg.sample_dt (dense output)
     sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
-    update_modes: Callable | None = None  # update_modes(t, y, p, sq) -> bool: after each
-    #                        accepted step, the law's discrete modes from the step-end state
-    #                        (engine.contract); True when one changed (the right-hand side did)
+    update_modes: Callable | None = None  # update_modes(t, y, p, sq, landed) -> bool: after
+    #                        each accepted step, the law's discrete modes from the step-end
+    #                        state and the switch landed on (-1: none; engine.contract); True
+    #                        when one changed (the right-hand side did)
 
 
 class Stepper(NamedTuple):

@@ -68,7 +68,7 @@ def _make_dense(tab, n):
 
 
 @njit(inline="always", error_model="numpy", refcount=False)
-def _no_modes(t, y, p, sq):
+def _no_modes(t, y, p, sq, landed):
     return False
 
 
@@ -122,7 +122,7 @@ def make_stepper(problem) -> Stepper:
             ctr[CTR_EVALS] += 4
             observe(t, y0, t_new, y, ym, p, sq, obs)
             if modal:
-                update_modes(t_new, y, p, sq)   # fixed steps: a switch is seen at a step end
+                update_modes(t_new, y, p, sq, -1)   # fixed steps: a switch is seen at a step end
             if sampling and sample_due(state[0], cfg, t_new):
                 coeffs(k1, k2, k3, k4, Q)
                 state[0] = emit(t, h, t_new, y0, y, Q, p, sq, cfg, obs, ctr, rec, state[0],

@@ -37,7 +37,7 @@ class System(NamedTuple):
     event_jumps: bool     # the events mark jumps of rhs (static laws' Karnopp band edges)
     z_index: int          # index of the friction law's first state in y
     phases: str           # how the law's phases are read (engine.contract.FrictionLaw)
-    update_modes: Callable | None  # update_modes(t, y, p, sq) -> bool, or None (no modes)
+    update_modes: Callable | None  # update_modes(t, y, p, sq, landed) -> bool, or None
     outputs: object       # the system's own observables (engine.contract.SystemOutputs)
 
 
@@ -126,9 +126,9 @@ def make_system(scene) -> System:
         law_update = lk.update_modes
 
         @njit(inline="always", error_model="numpy")
-        def update_modes(t, y, p, sq):
+        def update_modes(t, y, p, sq, landed):
             u, _, hold = drive(t, y, p, sq)
-            return law_update(u, y, hold, p)
+            return law_update(u, y, hold, p, landed)
 
     return System(
         n=n, n_err=b.n_err, rhs=rhs, n_events=n_events, events=events,

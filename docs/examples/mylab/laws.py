@@ -26,6 +26,7 @@ class MaxwellSlip(FrictionLaw):
         "C": Param(20.0, "1", "attraction rate of a slipping element", lo=0.0, lo_open=True),
     }
     phases = "alpha"                   # alpha = the weight of the slipping elements
+    switch_jumps = True                # a mode change is a jump: probe for grazing switches
 
     def n_states(self, size):
         return size["k"]               # one deflection per element ...
@@ -82,21 +83,23 @@ class MaxwellSlip(FrictionLaw):
         def switches(u, y, hold, p, g):            # where the modes change
             g[0] = u                               # a reversal
             su = s(u, p)
+            d = 1.0 if u > 0.0 else -1.0
             for i in range(n):                     # a stuck element reaching its share
-                g[1 + i] = p[ia + i] * su - abs(p[ik + i] * y[Z + i]) if y[M + i] == 0.0 else 1.0
+                stuck = y[M + i] == 0.0 and abs(u) >= p[stick_band]   # in the direction of u
+                g[1 + i] = p[ia + i] * su - d * p[ik + i] * y[Z + i] if stuck else 1.0
 
         @b.jit(inline="always")
-        def update_modes(u, y, hold, p):
+        def update_modes(u, y, hold, p, landed):   # landed: the switch just landed on, or -1
             changed = False
             su = s(u, p)
-            band = p[stick_band]       # a landing on a switch may stop a hair short of it
+            band = p[stick_band]
             for i in range(n):
                 Fi = p[ik + i] * y[Z + i]
-                if (y[M + i] == 0.0 and Fi * u > 0.0 and abs(u) >= band
-                        and abs(Fi) >= (1 - 1e-9) * p[ia + i] * su):
+                if y[M + i] == 0.0 and abs(u) >= band and (
+                        landed == 1 + i or (Fi * u > 0.0 and abs(Fi) >= p[ia + i] * su)):
                     y[M + i] = 1.0 if u > 0.0 else -1.0
                     changed = True
-                elif y[M + i] != 0.0 and (y[M + i] * u < 0.0 or abs(u) < band):
+                elif y[M + i] != 0.0 and (landed == 0 or y[M + i] * u < 0.0 or abs(u) < band):
                     y[M + i] = 0.0
                     changed = True
             return changed
