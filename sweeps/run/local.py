@@ -46,12 +46,12 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=
 def _warm_up_here(plan: Plan, sink: BlockSink, progress: bool) -> bool:
     """Compile the kernel in this process, on a daemon thread (a Ctrl-C or a cancel during
     a first compilation, which cannot be interrupted, leaves it behind instead of waiting
-    for it), saying so after NOTICE_AFTER_S (phases.Compiling); False if
+    for it), saying so after NOTICE_AFTER_S (phases.compiling); False if
     ``sink.should_stop()`` turned true meanwhile."""
     thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-compile",
                               args=(plan.scene, plan.params, plan.numerics.settings))
     thread.start()
-    t0, compiling = time.monotonic(), phases.Compiling(progress)
+    t0, compiling = time.monotonic(), phases.compiling(progress)
     try:
         while thread.is_alive():
             thread.join(0.1)

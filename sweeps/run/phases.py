@@ -53,24 +53,20 @@ def say(plan, phase: str, enabled: bool) -> None:
         print(f"{plan.spec.name} [{plan.sweep_id}] {phase}", file=sys.stderr, flush=True)
 
 
-class Compiling:
-    """Called while a kernel is compiled or loaded (sweeps.run.local, the cluster's
-    warm-up), after NOTICE_AFTER_S: the first call shows a line that says a first run of
-    this scene compiles it (a timer, redrawn every REDRAW_S: a compilation takes seconds to
-    a minute), the next calls keep it alive; :meth:`close` ends it. Nothing when not
-    ``enabled``."""
+class Timer:
+    """A phase without a count that can take seconds to a minute (a cluster starting, a
+    first compilation): the first call shows ``<desc>: <elapsed>``, the next calls, made
+    while waiting, keep it alive (redrawn every REDRAW_S); :meth:`close` ends it. Nothing
+    when not ``enabled``."""
 
-    TEXT = ("ditherlab: compiling the engine for this scene (its first run here; cached for "
-            "later runs)")
-
-    def __init__(self, enabled: bool):
-        self.enabled, self._bar = enabled, None
+    def __init__(self, desc: str, enabled: bool):
+        self.desc, self.enabled, self._bar = desc, enabled, None
 
     def __call__(self) -> None:
         if not self.enabled:
             return
         if self._bar is None:
-            self._bar = _bar_class()(desc=self.TEXT, bar_format="{desc} {elapsed}",
+            self._bar = _bar_class()(desc=self.desc, bar_format="{desc}: {elapsed}",
                                      mininterval=MININTERVAL_S)
         self._bar.keep_alive()
 
@@ -78,3 +74,15 @@ class Compiling:
         if self._bar is not None:
             self._bar.close()
             self._bar = None
+
+
+def starting(plan, workers: int, enabled: bool) -> Timer:
+    """``<name> [<id>] starting a local cluster of N workers: 00:02``."""
+    return Timer(f"{plan.spec.name} [{plan.sweep_id}] starting a local cluster of {workers} "
+                 "workers", enabled)
+
+
+def compiling(enabled: bool) -> Timer:
+    """Said after NOTICE_AFTER_S of a kernel's warm-up (sweeps.run.local, the cluster's)."""
+    return Timer("ditherlab: compiling the engine for this scene (its first run here; cached "
+                 "for later runs)", enabled)

@@ -125,8 +125,9 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and not here and (todo or needs_estimate(plan, sweep, cube)) else None
+    shown = phases.starting(plan, workers, progress)   # while it starts, drawn by client()
     if early is not None:
-        phases.say(plan, f"starting a local cluster of {workers} workers", progress)
+        shown()
     try:
         # this process alone writes from here on; the journal may have grown since the
         # rebuild above (another writer finished or died in between): read it again
@@ -151,8 +152,9 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                 # drawn from the sweep id): no tail of re-runs after the last block
                 extra["sample"] = SampleRuns(plan)
             if early is not None:   # its workers are warm: the kernel compiled there
-                compiling = phases.Compiling(progress)
-                client = early.client(sink.should_stop, compiling)
+                compiling = phases.compiling(progress)
+                client = early.client(sink.should_stop, compiling, starting=shown)
+                shown.close()
                 compiling.close()
                 extra["warm_up"] = False
             waited = time.perf_counter() - t
@@ -162,12 +164,14 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                     **extra)
             if early is not None:
                 timings["cluster_s"] = waited
+        shown.close()
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
             phases.say(plan, "publishing the cube", progress)
             t = time.perf_counter()
             store.publish(cube, sweep.cube)
             timings["publish_s"] = time.perf_counter() - t
     except BaseException as exc:
+        shown.close()
         abort(plan, sink, lease, exc, serving=stop is not None)
         if early is not None:
             early.close()

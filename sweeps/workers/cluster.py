@@ -109,12 +109,12 @@ class EarlyStart:
             if not self._closing:
                 self._error = exc
 
-    def _wait(self, done, should_stop, notice) -> bool:
+    def _wait(self, done, should_stop, notice, after: float = NOTICE_AFTER_S) -> bool:
         t0 = time.monotonic()
         while not done():
             if should_stop():
                 return False
-            if notice is not None and time.monotonic() - t0 > NOTICE_AFTER_S:
+            if notice is not None and time.monotonic() - t0 > after:
                 notice()
             time.sleep(0.05)
         return True
@@ -125,12 +125,13 @@ class EarlyStart:
                           else signal.default_int_handler)
             self._ignoring = False
 
-    def client(self, should_stop=lambda: False, notice=None):
+    def client(self, should_stop=lambda: False, notice=None, starting=None):
         """The client once its workers are warm; None if ``should_stop()`` turned true
         while waiting (a first compilation can take a minute on a busy machine). Calls
-        ``notice()`` every 50 ms once the wait exceeds NOTICE_AFTER_S (a display that
-        says so and stays alive). Raises what the start raised (ClusterStartError)."""
-        if not self._wait(self._up.is_set, should_stop, None):
+        ``starting()`` every 50 ms while the workers start, and ``notice()`` every 50 ms
+        once their warm-up takes longer than NOTICE_AFTER_S (displays that say so and stay
+        alive). Raises what the start raised (ClusterStartError)."""
+        if not self._wait(self._up.is_set, should_stop, starting, after=0.0):
             return None
         self._restore_sigint()
         if not self._wait(lambda: not self._thread.is_alive(), should_stop, notice):
