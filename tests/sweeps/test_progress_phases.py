@@ -84,3 +84,28 @@ def test_a_quiet_submit_shows_nothing(tmp_path, capfd):
     assert submit(plan, tmp_path / "store", progress=True).state == "done"
     phases = [s.split(":")[0] for s in _states(capfd.readouterr().err, plan)]
     assert phases[0] == "points" and phases[-1] == "publishing the cube", phases
+
+
+def test_a_bar_left_still_is_redrawn_while_work_goes_on(capfd):
+    """A task can run longer than 10 s (a first compilation, a costly re-run): the loops
+    that wait call ``keep_alive()``, which redraws a bar nothing redrew for REDRAW_S
+    (elapsed time, rate) and leaves a fresh one alone (issue 38)."""
+    from sweeps.run import phases
+
+    plan = make_plan(parse_spec(SPEC))
+    bar = phases.bar(plan, "points", plan.n_points, "point", True)
+    capfd.readouterr()
+    bar.keep_alive()
+    assert capfd.readouterr().err == ""   # drawn just now
+    bar.last_print_t -= phases.REDRAW_S + 1
+    bar.keep_alive()
+    assert _states(capfd.readouterr().err, plan)[-1].startswith("points:")
+    timer = phases.starting(plan, 2, True)
+    timer()
+    timer._bar.last_print_t -= phases.REDRAW_S + 1
+    timer()
+    timer.close()
+    states = _states(capfd.readouterr().err, plan)
+    assert len(states) >= 2 and all(s.startswith("starting a local cluster of 2 workers: ")
+                                    for s in states), states
+    bar.close()
