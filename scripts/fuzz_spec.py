@@ -10,8 +10,8 @@ exception, never over 1 s of CPU, never growing memory. Cases whose mutation is 
 construction (NaN, a string for a number, a repeated grid value, an unknown integrator,
 ...) must be refused; a few benign mutations must be accepted.
 
-The mutations and the checks are the test suite's (tests/sweeps/spec_mutations.py,
-tests/sweeps/spec_cases.py; tests/sweeps/test_spec_fuzz.py runs a CI-sized sample of
+The mutations and the checks are the test suite's (tests/sweeps/spec/spec_mutations.py,
+tests/sweeps/spec/spec_cases.py; tests/sweeps/spec/test_spec_fuzz.py runs a CI-sized sample of
 them): this script runs many more, from a seed.
 
     .venv/bin/python scripts/fuzz_spec.py [--n 1000] [--seed 1] [--show 5]
@@ -36,8 +36,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from tests.sweeps.spec_cases import bases, check  # noqa: E402
-from tests.sweeps.spec_mutations import MUTATIONS  # noqa: E402
+from tests.sweeps.spec.spec_cases import bases, check  # noqa: E402
+from tests.sweeps.spec.spec_mutations import MUTATIONS  # noqa: E402
 
 
 class Hang(Exception):

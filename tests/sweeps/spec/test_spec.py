@@ -330,7 +330,7 @@ def test_saved_spec_json_parses_again():
 def test_example_specs_still_validate():
     from pathlib import Path
 
-    specs = sorted((Path(__file__).parents[2] / "specs").glob("*.toml"))
+    specs = sorted((Path(__file__).parents[3] / "specs").glob("*.toml"))
     assert len(specs) >= 6
     with warnings.catch_warnings():
         warnings.simplefilter("error", SpecWarning)

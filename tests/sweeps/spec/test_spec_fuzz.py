@@ -3,7 +3,7 @@
 a SpecError whose lines are short and name the field, and in exit status 2 from
 ``ditherlab plan`` / ``submit`` (``sweeps.cli.main`` in-process) with nothing written to
 the store; the benign mutations must be accepted and plan. The mutations are the ones
-``scripts/fuzz_spec.py`` runs by the thousand (tests/sweeps/spec_mutations.py); this is
+``scripts/fuzz_spec.py`` runs by the thousand (tests/sweeps/spec/spec_mutations.py); this is
 the CI-sized sample, drawn by hypothesis."""
 import tempfile
 from pathlib import Path

@@ -1,8 +1,8 @@
 """Mutated sweep specs as cases (issue 10): :class:`Case` (a spec, how it is written, what
 must happen to it), writing it as a TOML or JSON file, and :func:`check`, which runs one
 case through ``load_spec`` and ``ditherlab plan`` / ``submit`` and returns its faults (an
-empty list is a pass). The mutations that make cases: tests/sweeps/spec_mutations.py;
-they drive tests/sweeps/test_spec_fuzz.py (hypothesis) and scripts/fuzz_spec.py (a seeded
+empty list is a pass). The mutations that make cases: tests/sweeps/spec/spec_mutations.py;
+they drive tests/sweeps/spec/test_spec_fuzz.py (hypothesis) and scripts/fuzz_spec.py (a seeded
 ``random.Random``, many more cases)."""
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import time
 import tomllib
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 SPECS = sorted((ROOT / "specs").glob("*.toml"))
 MINIMAL = {"name": "t", "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 4}, "omega": [100.0]}}
 # the Sec. 7 scene at small size (elastoplastic, sine dither): where the stability bound and
@@ -176,7 +176,7 @@ def check(case: Case, tmp: Path, index: int = 0, commands=("plan",)) -> dict:
 
 
 def _cli_faults(command: str, path: Path, store: Path) -> list[str]:
-    from ..helpers import in_process
+    from ...helpers import in_process
 
     rc, _, err = in_process(command, path, "--store", store)
     faults = []

@@ -1,5 +1,5 @@
 """The one mutator of sweep specs (issues 9, 10), shared by the CI-sized property test
-(tests/sweeps/test_spec_fuzz.py, driven by hypothesis) and the long fuzzing run
+(tests/sweeps/spec/test_spec_fuzz.py, driven by hypothesis) and the long fuzzing run
 (scripts/fuzz_spec.py, driven by a seeded ``random.Random``).
 
 A mutation takes a random source (``random.Random``'s interface) and a valid spec (a
