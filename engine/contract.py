@@ -112,6 +112,8 @@ class SystemOutputs(NamedTuple):
     observe: Callable        # observe(t0, y0, t1, y1, ymid, p, sq, o)
     finish: Callable         # finish(t, y, p, o, out, span): out[:len(names)]; span = the
     #                          window's length
+    stop: Callable | None = None   # stop(t, y, p, is_period, o): at the driver's stops
+    period_stops: bool = False     # the driver must stop on dither period boundaries
 
 
 @dataclass

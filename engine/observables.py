@@ -140,6 +140,7 @@ def make_observer(scene, system) -> Observer:
     if so is not None:   # the system's own observables: slots after the engine's
         hooks, finish = _with_system_outputs(hooks, finish, so, len(names), hist)
         names, needs_mid, size = names + own, True, O_SIZE + so.size
+        period_stops = period_stops or (so.period_stops and not undithered)
     return Observer(size, names, hist, needs_mid, period_stops, *hooks, finish)
 
 
@@ -149,6 +150,11 @@ def _with_system_outputs(hooks, finish, so, k, hist):
     them all)."""
     init, start, observe, stop = hooks
     s_start, s_observe, s_finish, m = so.start, so.observe, so.finish, len(so.names)
+    s_stop = so.stop
+    if s_stop is None:
+        @njit(inline="always", error_model="numpy")
+        def s_stop(t, y, p, is_period, o):
+            pass
 
     @njit(inline="always", error_model="numpy")
     def start2(t, y, p, sq, obs):
@@ -169,7 +175,13 @@ def _with_system_outputs(hooks, finish, so, k, hist):
                 out[k + m + j] = out[k + j]
         s_finish(t, y, p, obs[O_SIZE:], out[k:k + m], t - obs[O_T0])
 
-    return (init, start2, observe2, stop), finish2
+    @njit(inline="always", error_model="numpy")
+    def stop2(t, y, p, is_period, obs):
+        stop(t, y, p, is_period, obs)
+        if obs[O_ON] != 0.0:
+            s_stop(t, y, p, is_period, obs[O_SIZE:])
+
+    return (init, start2, observe2, stop2), finish2
 
 
 def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto, band_law):

@@ -263,7 +263,7 @@ def hunting_map(ds: xr.Dataset, path, sel=None, title: str | None = None,
     ax.set_xlabel(axis_label(amp["omega"]))
     ax.set_ylabel(axis_label(amp["W"]))
     _grid_on_top(ax)
-    ax.set_title(_title(ds, "Servo hunting (outlined: quenched below 1 %)", amp, title),
+    ax.set_title(_title(ds, "Hunting (outlined: < 1 % of the most)", amp, title),
                  fontsize=10)
     return _save(fig, path)
 

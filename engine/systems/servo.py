@@ -18,13 +18,14 @@ Friction with integral action hunts: the mass sticks short of the target, the in
 builds the force until it breaks away, overshoots and sticks on the other side -- a limit
 cycle. Dither can quench it. Outputs of its own (over ``[t_transient, t_end]``):
 
-- ``hunt_amplitude``: half the peak-to-peak of the error ``e`` (each step's extremes from the
-  quadratic through its start, midpoint and end);
-- ``hunt_period``: the mean time between upward crossings of ``e`` through a band
-  ``+-hunt_band`` (a crossing counts once ``e`` rose above ``+hunt_band`` after it was below
-  ``-hunt_band``, so that the dither's ripple about a settled error is not counted); 0 with
-  fewer than two crossings (no hunting);
-- ``steady_error``: the RMS of ``e`` (Simpson's rule on each step).
+- ``hunt_amplitude``: half the peak-to-peak of the slow error (with dither: the error's mean
+  over each dither period, so that the dither's own ripple, ~W/omega in position, is not
+  taken for hunting; without: the error itself, each step's extremes from the quadratic
+  through its start, midpoint and end);
+- ``hunt_period``: the mean time between upward crossings of the slow error through a band
+  ``+-hunt_band`` (a crossing counts once it rose above ``+hunt_band`` after it was below
+  ``-hunt_band``); 0 with fewer than two crossings (no hunting);
+- ``steady_error``: the RMS of the slow error (Simpson's rule on each step).
 
 Spec: ``system = "servo"``, ``[params] servo = { m, kp, ki, kd, x_ref, hunt_band }``.
 """
@@ -47,7 +48,8 @@ OUTPUTS = {
     "steady_error": ("RMS of the servo's tracking error after the transient", "1"),
 }
 # accumulator slots of the servo's outputs
-S_EMIN, S_EMAX, S_E2, S_ARMED, S_FIRST, S_LAST, S_COUNT, S_SIZE = range(8)
+(S_EMIN, S_EMAX, S_E2, S_ARMED, S_FIRST, S_LAST, S_COUNT, S_E1, S_E1PREV, S_TPREV, S_T2,
+ S_SIZE) = range(12)
 
 
 class Servo(MechanicalSystem):
@@ -124,31 +126,56 @@ class Servo(MechanicalSystem):
 
 
 def _outputs(b, wanted, error):
+    """The servo's observables. With dither they read the *slow* error: its average over each
+    dither period (the driver stops on the period boundaries), so that the dither's own
+    ripple (amplitude ~ W / omega in position) is not taken for hunting; without dither, the
+    error itself (each step's extremes from the quadratic through start, midpoint and end)."""
     codes = np.array([tuple(OUTPUTS).index(o) for o in wanted], dtype=np.int64)
     iband = b.ix["hunt_band"]
+    dithered = b.scene.dither != "none"
+
+    @b.jit(inline="always", error_model="numpy")
+    def crossing(o, e, band, tc):
+        """Schmitt trigger on the error: an upward crossing of +band after -band."""
+        if e < -band:
+            o[S_ARMED] = 1.0
+        elif o[S_ARMED] == 1.0 and e > band:
+            if o[S_COUNT] == 0.0:
+                o[S_FIRST] = tc
+            o[S_LAST] = tc
+            o[S_COUNT] += 1.0
+            o[S_ARMED] = 0.0
 
     @b.jit(inline="always", error_model="numpy")
     def start(t, y, p, sq, o):
         e = error(t, y, p)
-        o[S_EMIN] = e
-        o[S_EMAX] = e
+        o[S_EMIN] = np.inf if dithered else e
+        o[S_EMAX] = -np.inf if dithered else e
         o[S_E2] = 0.0
-        o[S_ARMED] = 1.0 if e < -p[iband] else 0.0
+        o[S_ARMED] = 1.0 if (e < -p[iband] and not dithered) else 0.0
         o[S_FIRST] = math.nan
         o[S_LAST] = math.nan
         o[S_COUNT] = 0.0
+        o[S_E1] = 0.0
+        o[S_E1PREV] = 0.0
+        o[S_TPREV] = math.nan
+        o[S_T2] = 0.0
 
     @b.jit(inline="always", error_model="numpy")
     def observe(t0, y0, t1, y1, ymid, p, sq, o):
         e0, em, e1 = error(t0, y0, p), error(0.5 * (t0 + t1), ymid, p), error(t1, y1, p)
         h = t1 - t0
+        if dithered:   # the period means are taken at the stops
+            o[S_E1] += h / 6.0 * (e0 + 4.0 * em + e1)
+            return
         o[S_E2] += h / 6.0 * (e0 * e0 + 4.0 * em * em + e1 * e1)
+        o[S_T2] += h
         a, bq = 2.0 * (e0 + e1) - 4.0 * em, 4.0 * em - 3.0 * e0 - e1
         lo, hi = min(e0, e1), max(e0, e1)
         if a != 0.0:
-            s = -bq / (2.0 * a)
-            if 0.0 < s < 1.0:
-                v = (a * s + bq) * s + e0
+            sx = -bq / (2.0 * a)
+            if 0.0 < sx < 1.0:
+                v = (a * sx + bq) * sx + e0
                 lo, hi = min(lo, v), max(hi, v)
         o[S_EMIN] = min(o[S_EMIN], lo)
         o[S_EMAX] = max(o[S_EMAX], hi)
@@ -158,22 +185,33 @@ def _outputs(b, wanted, error):
         if o[S_ARMED] == 1.0 and e1 > band:
             # the upward crossing of +band inside the step, by linear interpolation
             tc = t1 if e1 == e0 else t0 + h * min(max((band - e0) / (e1 - e0), 0.0), 1.0)
-            if o[S_COUNT] == 0.0:
-                o[S_FIRST] = tc
-            o[S_LAST] = tc
-            o[S_COUNT] += 1.0
-            o[S_ARMED] = 0.0
+            crossing(o, e1, band, tc)
+
+    @b.jit(inline="always", error_model="numpy")
+    def stop(t, y, p, is_period, o):
+        if not dithered or not is_period:
+            return
+        if not math.isnan(o[S_TPREV]):
+            T = t - o[S_TPREV]
+            ebar = (o[S_E1] - o[S_E1PREV]) / T
+            o[S_EMIN] = min(o[S_EMIN], ebar)
+            o[S_EMAX] = max(o[S_EMAX], ebar)
+            o[S_E2] += ebar * ebar * T
+            o[S_T2] += T
+            crossing(o, ebar, p[iband], t)
+        o[S_E1PREV] = o[S_E1]
+        o[S_TPREV] = t
 
     @b.jit(inline="always", error_model="numpy")
     def finish(t, y, p, o, out, span):
         for j in range(codes.size):
             c = codes[j]
             if c == 0:
-                out[j] = 0.5 * (o[S_EMAX] - o[S_EMIN])
+                out[j] = 0.5 * (o[S_EMAX] - o[S_EMIN]) if o[S_EMAX] >= o[S_EMIN] else 0.0
             elif c == 1:
                 out[j] = ((o[S_LAST] - o[S_FIRST]) / (o[S_COUNT] - 1.0)
                           if o[S_COUNT] >= 2.0 else 0.0)
             else:
-                out[j] = math.sqrt(max(o[S_E2], 0.0) / span)
+                out[j] = math.sqrt(max(o[S_E2], 0.0) / o[S_T2]) if o[S_T2] > 0.0 else 0.0
 
-    return SystemOutputs(wanted, S_SIZE, start, observe, finish)
+    return SystemOutputs(wanted, S_SIZE, start, observe, finish, stop, dithered)
