@@ -1,6 +1,6 @@
 """Engine benchmark: speed of the numba engine as ratios to compiled C and to scipy.
 
-Run: ``.venv/bin/python scripts/bench_engine.py [--quick] [--no-scipy] [--scipy-cap S]``
+Run: ``.venv/bin/python scripts/bench_engine.py [--repeats N] [--no-scipy] [--no-effects] [--no-stiff]``
 
 The machine is shared and noisy, so absolute times (thread CPU time, median of repeats) are
 only printed for context; what counts is the ratio to the C reference ``../shared/anchors/anchor.c``
