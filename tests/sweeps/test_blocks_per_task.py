@@ -55,6 +55,9 @@ class _Bar:
     def update(self, n) -> None:
         pass
 
+    def keep_alive(self) -> None:   # (sweeps.run.phases: redrawn while the dispatch waits)
+        pass
+
 
 @pytest.mark.timeout(300)
 def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
