@@ -61,6 +61,7 @@ from .dither import CODE, NONE
 from .friction.stribeck import make_g
 from .jit import njit
 from .outputs import SIMULATE, VECTOR
+from .systems import with_system_outputs
 from .phase_book import (
     N_HIST,
     O_HIST,
@@ -138,50 +139,10 @@ def make_observer(scene, system) -> Observer:
     needs_mid = phases or (p2p and undithered)
     size = O_SIZE
     if so is not None:   # the system's own observables: slots after the engine's
-        hooks, finish = _with_system_outputs(hooks, finish, so, len(names), hist)
+        hooks, finish = with_system_outputs(hooks, finish, so, len(names), hist)
         names, needs_mid, size = names + own, True, O_SIZE + so.size
         period_stops = period_stops or (so.period_stops and not undithered)
     return Observer(size, names, hist, needs_mid, period_stops, *hooks, finish)
-
-
-def _with_system_outputs(hooks, finish, so, k, hist):
-    """The hooks and finish of the engine's observables, followed by the system's on the
-    slots ``obs[O_SIZE:]``; its outputs go after the engine's ``k`` scalars (alpha_hist after
-    them all)."""
-    init, start, observe, stop = hooks
-    s_start, s_observe, s_finish, m = so.start, so.observe, so.finish, len(so.names)
-    s_stop = so.stop
-    if s_stop is None:
-        @njit(inline="always", error_model="numpy")
-        def s_stop(t, y, p, is_period, o):
-            pass
-
-    @njit(inline="always", error_model="numpy")
-    def start2(t, y, p, sq, obs):
-        start(t, y, p, sq, obs)
-        s_start(t, y, p, sq, obs[O_SIZE:])
-
-    @njit(inline="always", error_model="numpy")
-    def observe2(t0, y0, t1, y1, ymid, p, sq, obs):
-        observe(t0, y0, t1, y1, ymid, p, sq, obs)
-        if obs[O_ON] != 0.0:
-            s_observe(t0, y0, t1, y1, ymid, p, sq, obs[O_SIZE:])
-
-    @njit(inline="always", error_model="numpy")
-    def finish2(t, y, p, obs, out):
-        finish(t, y, p, obs, out)
-        if hist:   # the engine's finish wrote the histogram after its own k scalars
-            for j in range(N_HIST - 1, -1, -1):
-                out[k + m + j] = out[k + j]
-        s_finish(t, y, p, obs[O_SIZE:], out[k:k + m], t - obs[O_T0])
-
-    @njit(inline="always", error_model="numpy")
-    def stop2(t, y, p, is_period, obs):
-        stop(t, y, p, is_period, obs)
-        if obs[O_ON] != 0.0:
-            s_stop(t, y, p, is_period, obs[O_SIZE:])
-
-    return (init, start2, observe2, stop2), finish2
 
 
 def _make_observe(interface, velocity, z_index, g, phases, hist, p2p_steps, elasto, band_law):

@@ -19,8 +19,6 @@ import hashlib
 import importlib
 import importlib.util
 import math
-import sys
-import traceback
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +26,10 @@ import numpy as np
 
 from . import params as P
 from .contract import FrictionLaw, MechanicalSystem, ModelError, Param
+from .user_code import import_module as _import
+from .user_code import one_line as _one_line
+from .user_code import short as _short
+from .user_code import where as _where
 
 MAX_STATES = 64
 
@@ -96,69 +98,6 @@ def resolve(kind: str, ref: str):
                          "(docs/MODELS.md rule 1)")
     _check_declarations(kind, ref, obj)
     return obj
-
-
-def _import(kind: str, ref: str, module_name: str):
-    try:
-        if module_name.endswith(".py") or "/" in module_name:
-            path = Path(module_name)
-            if not path.is_file():
-                raise ModelError(f"{kind} {ref!r}: no file {module_name!r}")
-            name = "ditherlab_user_" + hashlib.sha256(str(path.resolve()).encode()).hexdigest()[:12]
-            if name in sys.modules:
-                return sys.modules[name]
-            spec = importlib.util.spec_from_file_location(name, path)
-            module = importlib.util.module_from_spec(spec)
-            sys.modules[name] = module
-            try:
-                spec.loader.exec_module(module)
-            except BaseException:
-                del sys.modules[name]
-                raise
-            return module
-        try:
-            return importlib.import_module(module_name)
-        except ModuleNotFoundError as exc:
-            # `ditherlab` started from a project folder: its packages are importable from
-            # there, as with `python -m` (the console script's sys.path lacks the folder)
-            here = str(Path.cwd())
-            if here in sys.path or exc.name is None or \
-                    exc.name.split(".")[0] != module_name.split(".")[0]:
-                raise
-            sys.path.append(here)
-            return importlib.import_module(module_name)
-    except ModelError:
-        raise
-    except SyntaxError as exc:
-        raise ModelError(f"{kind} {ref!r}: cannot import {module_name!r}: SyntaxError "
-                         f"({exc.msg}) at {Path(exc.filename or '?').name} line {exc.lineno}") \
-            from None
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
-        raise ModelError(f"{kind} {ref!r}: cannot import {module_name!r}: {_one_line(exc)}"
-                         f"{_where(exc)}") from None
-
-
-def _short(value, limit: int = 60) -> str:
-    """``repr(value)`` cut to about ``limit`` characters (an echoed spec value)."""
-    text = repr(value)
-    return text if len(text) <= limit else text[:limit] + "..."
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split()) or type(exc).__name__
-    return f"{type(exc).__name__}: {text[:200]}"
-
-
-def _where(exc: BaseException, module=None) -> str:
-    """' (at file.py line N)' for the innermost frame outside ditherlab and the stdlib."""
-    frames = traceback.extract_tb(exc.__traceback__)
-    ours = Path(__file__).resolve().parent.parent
-    for frame in reversed(frames):
-        path = Path(frame.filename)
-        if "importlib" in frame.filename or ours in path.resolve().parents:
-            continue
-        return f" (at {path.name} line {frame.lineno})"
-    return ""
 
 
 def _check_declarations(kind: str, ref: str, obj) -> None:

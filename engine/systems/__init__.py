@@ -18,6 +18,7 @@ from typing import NamedTuple
 from .. import registry
 from ..contract import Build, ModelError
 from ..jit import njit
+from ..phase_book import N_HIST, O_ON, O_SIZE, O_T0
 
 
 class System(NamedTuple):
@@ -138,75 +139,46 @@ def make_system(scene) -> System:
     )
 
 
-__all__ = ["System", "build_context", "make_system"]
 
 
-SENTINEL = 1.2345678e300   # a value no rate or state takes: what a model did not write
+def with_system_outputs(hooks, finish, so, k, hist):
+    """The hooks and finish of the engine's observables, followed by the system's on the
+    slots ``obs[O_SIZE:]``; its outputs go after the engine's ``k`` scalars (alpha_hist after
+    them all)."""
+    init, start, observe, stop = hooks
+    s_start, s_observe, s_finish, m = so.start, so.observe, so.finish, len(so.names)
+    s_stop = so.stop
+    if s_stop is None:
+        @njit(inline="always", error_model="numpy")
+        def s_stop(t, y, p, is_period, o):
+            pass
 
+    @njit(inline="always", error_model="numpy")
+    def start2(t, y, p, sq, obs):
+        start(t, y, p, sq, obs)
+        s_start(t, y, p, sq, obs[O_SIZE:])
 
-def probe(scene, p) -> None:
-    """Compile ``scene``'s system and take its first evaluation: ModelError (one line, the
-    user's file and line where known) when a model does not compile, writes outside its
-    states or leaves one unwritten (a wrong number of states), or gives a NaN or an infinity
-    at the first step. Used for models a user brings, before anything is written."""
-    import numpy as np
+    @njit(inline="always", error_model="numpy")
+    def observe2(t0, y0, t1, y1, ymid, p, sq, obs):
+        observe(t0, y0, t1, y1, ymid, p, sq, obs)
+        if obs[O_ON] != 0.0:
+            s_observe(t0, y0, t1, y1, ymid, p, sq, obs[O_SIZE:])
 
-    try:
-        system = make_system(scene)
-        n, extra = system.n, 8
-        y = np.full(n + extra, SENTINEL)
-        dy = np.full(n + extra, SENTINEL)
-        system.init(p, y[:n])
-        system.rhs(0.0, y[:n], p, 1.0, dy[:n])
-        u, F, a = system.interface(0.0, y[:n], p, 1.0)
-        g = np.full(max(system.n_events, 1) + extra, SENTINEL)
-        system.events(0.0, y[:n], p, 1.0, g[:max(system.n_events, 1)])
-    except ModelError:
-        raise
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
-        raise ModelError(compile_line(scene, exc)) from None
-    who = f"friction {scene.friction!r} on system {scene.system!r}"
-    if (y[n:] != SENTINEL).any() or (dy[n:] != SENTINEL).any():
-        raise ModelError(f"{who}: writes beyond the {n} states it declares (n_states, "
-                         "n_modes, state_names): check its number of states")
-    unset = np.flatnonzero(dy[:n] == SENTINEL)
-    if unset.size:
-        raise ModelError(f"{who}: gives no rate for state {int(unset[0])} of {n}: check its "
-                         "number of states (n_states) and that rates writes dy for each")
-    if system.n_events and (g[system.n_events:] != SENTINEL).any():
-        raise ModelError(f"{who}: its switches write more than the {system.n_events} values "
-                         "it declares (LawKernels.n_switches)")
-    bad = [name for name, v in (("a state", y[:n]), ("a rate", dy[:n]), ("the force", [F]),
-                                ("alpha", [a]), ("the interface velocity", [u]))
-           if not np.isfinite(np.asarray(v, dtype=float)).all()]
-    if bad:
-        raise ModelError(f"{who}: {bad[0]} is NaN or infinite at the first step (t = 0, "
-                         "the initial state): check its equations and parameters")
+    @njit(inline="always", error_model="numpy")
+    def finish2(t, y, p, obs, out):
+        finish(t, y, p, obs, out)
+        if hist:   # the engine's finish wrote the histogram after its own k scalars
+            for j in range(N_HIST - 1, -1, -1):
+                out[k + m + j] = out[k + j]
+        s_finish(t, y, p, obs[O_SIZE:], out[k:k + m], t - obs[O_T0])
 
+    @njit(inline="always", error_model="numpy")
+    def stop2(t, y, p, is_period, obs):
+        stop(t, y, p, is_period, obs)
+        if obs[O_ON] != 0.0:
+            s_stop(t, y, p, is_period, obs[O_SIZE:])
 
-def compile_line(scene, exc: BaseException) -> str:
-    """One line for a model that numba cannot compile (or that raised while building): the
-    first line of the error and the user's file and line."""
-    import re
-
-    text = str(exc)
-    first = next((ln.strip() for ln in text.splitlines() if ln.strip()), type(exc).__name__)
-    where = ""
-    refs = [r for r in (scene.friction, scene.system) if registry.is_import_path(r)]
-    for m in re.finditer(r'File "([^"]+)", line (\d+)', text):
-        path = m.group(1)
-        if not any(s in path for s in ("/engine/", "/numba/", "site-packages")):
-            where = f" (at {path.rsplit('/', 1)[-1]} line {m.group(2)})"
-            break
-    if not where:
-        import traceback
-        for frame in reversed(traceback.extract_tb(exc.__traceback__)):
-            if not any(s in frame.filename for s in ("/engine/", "/numba/", "site-packages")):
-                where = f" (at {frame.filename.rsplit('/', 1)[-1]} line {frame.lineno})"
-                break
-    kind = "numba cannot compile" if type(exc).__module__.startswith("numba") else \
-        f"{type(exc).__name__} while building"
-    return (f"{kind} {' / '.join(refs) or scene.friction}: {first[:200]}{where}")
+    return (init, start2, observe2, stop2), finish2
 
 
 def describe_states(scene) -> str:
@@ -222,3 +194,12 @@ def describe_states(scene) -> str:
     if extra:
         parts.append(f"{extra} quadrature{'s' if extra > 1 else ''}")
     return " + ".join(parts) + f"; {b.n_err} under error control"
+
+
+def probe(scene, p) -> None:
+    """Compile a brought model and take its first step (engine.systems.first_step.probe)."""
+    from .first_step import probe as _probe
+    _probe(scene, p)
+
+
+__all__ = ["System", "build_context", "make_system", "probe", "with_system_outputs"]

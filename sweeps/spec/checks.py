@@ -8,6 +8,7 @@ import numpy as np
 
 from .grid import AXES, system_defaults
 from .methods import CLASS_OUTPUT, PLANES, allowed_outputs, resolve_outputs
+from . import model_params
 from .messages import show
 from .models import Range, Spec
 
@@ -17,7 +18,7 @@ PAPER_LAWS = ("coulomb", "stribeck", "lugre", "elastoplastic")   # the paper's t
 
 def check_choices(spec: Spec) -> list[str]:
     """Faults in the combination of choices, without the grid's values."""
-    problems = []
+    problems = model_params.problems(spec)
     allowed = allowed_outputs(spec.method, spec.system)
     for name in spec.outputs or ():
         if name not in allowed:

@@ -27,6 +27,7 @@ from pydantic import (
     model_validator,
 )
 
+from . import model_params
 from .messages import show
 from engine.registry import LAW_NAMES, SYSTEM_NAMES
 
@@ -223,54 +224,23 @@ class Spec(_Strict):
 
     @field_validator("system", "friction")
     @classmethod
-    def _known_model(cls, v, info: ValidationInfo):
-        from engine import registry
-
-        registry.resolve(info.field_name, v)    # ModelError (a ValueError): one line
-        return v
-
-    @model_validator(mode="after")
-    def _models(self):
-        from engine import registry
-
-        registry.check_values(self.friction, self.system, self.model_values)
-        return self
+    def _known_model(cls, v, info: ValidationInfo):   # ModelError (a ValueError): one line
+        return model_params.resolved(info.field_name, v)
 
     @property
     def model_values(self) -> dict:
-        """The models' own parameters from ``[params]``: flat keys, and the keys of the table
-        named after a model's ``group`` (``gms = {...}``)."""
-        from engine import registry
-
-        extra = dict(self.params.model_extra or {})
-        values = {}
-        for owner in (registry.law(self.friction), registry.system(self.system)):
-            group = getattr(owner, "group", None)
-            if group and group in extra:
-                table = extra.pop(group)
-                if not isinstance(table, dict):
-                    raise ValueError(f"params.{group}: expected a table of {owner.name}'s "
-                                     f"parameters ({', '.join(registry.own_params(owner))}), "
-                                     f"got {show(table)}")
-                values.update({f"{k}": v for k, v in table.items()})
-        values.update(extra)
-        return values
+        """The models' own parameters from ``[params]`` (sweeps.spec.model_params)."""
+        return model_params.values(self)
 
     @property
     def brought_models(self) -> dict:
-        """Import path -> digest of its module's source, for the models the spec brings
-        (empty for the built-in ones, which the engine's fingerprint covers)."""
-        from engine import registry
-
-        return {ref: registry.source_digest(ref) for ref in (self.friction, self.system)
-                if registry.is_import_path(ref)}
+        """Import path -> source digest of each model the spec brings (model_params)."""
+        return model_params.brought(self)
 
     @property
     def model_sizes(self) -> tuple:
         """``engine.Scene.sizes``: the lengths of the models' vector parameters."""
-        from engine import registry
-
-        return registry.sizes_of(self.friction, self.system, self.model_values)
+        return model_params.sizes(self)
 
     @field_validator("name")
     @classmethod

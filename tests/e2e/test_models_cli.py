@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = [pytest.mark.subprocess]
+pytestmark = [pytest.mark.long, pytest.mark.subprocess]
 
 BIN = Path(sys.executable).parent / "ditherlab"
 BROKEN = {
@@ -25,8 +25,8 @@ class X(FrictionLaw):
 
         @b.jit(inline="always")
         def rates(u, y, dy, hold, p):
-            dy[Z] = u
-            return {"force": u}
+            dy[Z] = u + "a"
+            return u
 
         @b.jit(inline="always")
         def force(u, y, hold, p):

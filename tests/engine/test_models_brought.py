@@ -119,8 +119,11 @@ BAD.update({
                                         "            dy[Z + 2] = u\n            return y[Z]"),
                         "X", {}, "writes beyond the"),
     "too-few-states-written": (_law(n=2), "X", {}, "gives no rate for state 3"),
-    "numba-cannot-compile": (_law(rates="            dy[Z] = u\n            return {'a': u}"),
+    "numba-cannot-compile": (_law(rates="            dy[Z] = u + 'a'\n            return u"),
                              "X", {}, "numba cannot compile"),
+    "rates-returns-a-dict": (_law(rates="            dy[Z] = u\n            return {'a': u}"),
+                             "X", {}, "rates must return the friction force (a number), "
+                             "got Dict (at badlaw_rates_returns_a_dict.py line"),
     "nan-at-first-step": (_law(rates="            dy[Z] = u\n            return math.nan"
                                ).replace("from engine", "import math\nfrom engine"),
                           "X", {}, "NaN or infinite at the first step"),

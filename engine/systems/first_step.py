@@ -1,0 +1,123 @@
+"""The checks a model a user brings passes before anything runs (engine.registry; spec load):
+its kernels compiled and called one by one with the types of their returns checked, then the
+composed system's first evaluation (writes within its states, a rate for each, finite
+values). Each fault is one :class:`ModelError` line with the user's file and line."""
+from __future__ import annotations
+
+from .. import registry
+from ..contract import ModelError
+from . import build_context, make_system
+
+
+SENTINEL = 1.2345678e300   # a value no rate or state takes: what a model did not write
+
+
+def probe(scene, p) -> None:
+    """Compile ``scene``'s system and take its first evaluation: ModelError (one line, the
+    user's file and line where known) when a model does not compile, writes outside its
+    states or leaves one unwritten (a wrong number of states), or gives a NaN or an infinity
+    at the first step. Used for models a user brings, before anything is written."""
+    import numpy as np
+
+    _probe_parts(scene, p)
+    try:
+        system = make_system(scene)
+        n, extra = system.n, 8
+        y = np.full(n + extra, SENTINEL)
+        dy = np.full(n + extra, SENTINEL)
+        system.init(p, y[:n])
+        system.rhs(0.0, y[:n], p, 1.0, dy[:n])
+        u, F, a = system.interface(0.0, y[:n], p, 1.0)
+        g = np.full(max(system.n_events, 1) + extra, SENTINEL)
+        system.events(0.0, y[:n], p, 1.0, g[:max(system.n_events, 1)])
+    except ModelError:
+        raise
+    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        raise ModelError(compile_line(scene, exc)) from None
+    who = f"friction {scene.friction!r} on system {scene.system!r}"
+    if (y[n:] != SENTINEL).any() or (dy[n:] != SENTINEL).any():
+        raise ModelError(f"{who}: writes beyond the {n} states it declares (n_states, "
+                         "n_modes, state_names): check its number of states")
+    unset = np.flatnonzero(dy[:n] == SENTINEL)
+    if unset.size:
+        raise ModelError(f"{who}: gives no rate for state {int(unset[0])} of {n}: check its "
+                         "number of states (n_states) and that rates writes dy for each")
+    if system.n_events and (g[system.n_events:] != SENTINEL).any():
+        raise ModelError(f"{who}: its switches write more than the {system.n_events} values "
+                         "it declares (LawKernels.n_switches)")
+    bad = [name for name, v in (("a state", y[:n]), ("a rate", dy[:n]), ("the force", [F]),
+                                ("alpha", [a]), ("the interface velocity", [u]))
+           if not np.isfinite(np.asarray(v, dtype=float)).all()]
+    if bad:
+        raise ModelError(f"{who}: {bad[0]} is NaN or infinite at the first step (t = 0, "
+                         "the initial state): check its equations and parameters")
+
+
+def _probe_parts(scene, p) -> None:
+    """A brought law's kernels compiled and called one by one (so that numba's complaint
+    names the user's function, not the engine code it is inlined into), and the types of
+    what they return checked against the contract."""
+    import numpy as np
+
+    law, sysm, b = build_context(scene)
+    if not registry.is_import_path(scene.friction):
+        return
+    n = b.m0 + int(law.n_modes(b.size)) + 8
+    y, dy, g = np.zeros(n), np.zeros(n), np.zeros(max(1, 1 + n))
+    try:
+        lk = law.build(b)
+        lk.init(p, y)
+        F = lk.rates(0.1, y, dy, 0.0, p)
+        where = lk.rates
+        if not isinstance(F, float):
+            raise ModelError(f"{scene.friction}: rates must return the friction force (a "
+                             f"number), got {type(F).__name__}{_def_at(where)}")
+        where = lk.force
+        Fa = lk.force(0.1, y, 0.0, p)
+        if not (isinstance(Fa, tuple) and len(Fa) == 2
+                and all(isinstance(v, float) for v in Fa)):
+            raise ModelError(f"{scene.friction}: force must return (F, alpha), two numbers, "
+                             f"got {type(Fa).__name__}{_def_at(where)}")
+        if lk.switches is not None and lk.n_switches:
+            lk.switches(0.1, y, 0.0, p, g)
+        if lk.update_modes is not None:
+            lk.update_modes(0.1, y, 0.0, p, -1)
+    except ModelError:
+        raise
+    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        raise ModelError(compile_line(scene, exc)) from None
+
+
+def _def_at(fn) -> str:
+    code = getattr(getattr(fn, "py_func", fn), "__code__", None)
+    return f" (at {code.co_filename.rsplit('/', 1)[-1]} line {code.co_firstlineno})" \
+        if code else ""
+
+
+def compile_line(scene, exc: BaseException) -> str:
+    """One line for a model that numba cannot compile (or that raised while building): the
+    first line of the error and the user's file and line."""
+    import re
+
+    text = str(exc)
+    lines = [ln.strip() for ln in text.splitlines()
+             if ln.strip() and not ln.strip().startswith("Failed in ")]
+    first = lines[0] if lines else type(exc).__name__
+    if first.endswith(":") and len(lines) > 1:   # "No implementation ... for signature:"
+        first = f"{first} {lines[1]}"
+    where = ""
+    refs = [r for r in (scene.friction, scene.system) if registry.is_import_path(r)]
+    for m in re.finditer(r'File "([^"]+)", line (\d+)', text):
+        path = m.group(1)
+        if not any(s in path for s in ("/engine/", "/numba/", "site-packages")):
+            where = f" (at {path.rsplit('/', 1)[-1]} line {m.group(2)})"
+            break
+    if not where:
+        import traceback
+        for frame in reversed(traceback.extract_tb(exc.__traceback__)):
+            if not any(s in frame.filename for s in ("/engine/", "/numba/", "site-packages")):
+                where = f" (at {frame.filename.rsplit('/', 1)[-1]} line {frame.lineno})"
+                break
+    kind = "numba cannot compile" if type(exc).__module__.startswith("numba") else \
+        f"{type(exc).__name__} while building"
+    return (f"{kind} {' / '.join(refs) or scene.friction}: {first[:200]}{where}")
