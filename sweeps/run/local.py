@@ -94,8 +94,30 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
         running = [f for f in (sample.futures.values() if sample is not None else ())
                    if not f.done()]
         done = pool.wait_any([*inflight, *running], TICK_S * 5)
-        for b, record in [(inflight.pop(f), f.result()) for f in done if f in inflight]:
-            sink(b, record)   # a journal file each: few blocks here, and a block's file
-            bar.update(len(plan.blocks[b]))   # is what a repair sets aside
+        failed = _collect(plan, [f for f in done if f in inflight], inflight, sink, bar)
+        if failed is not None:   # (compute_block never raises: a crash of this process's
+            # machinery) what the other threads finish is kept, as a serial run kept the
+            # blocks before the crash; then the error goes up
+            for f in list(inflight):
+                f.cancel()   # not started yet
+            _collect(plan, [f for f in inflight if not f.cancelled()], inflight, sink, bar)
+            raise failed
         show_reruns(bar, sample, shown)
         bar.keep_alive()
+
+
+def _collect(plan: Plan, futures, inflight: dict, sink: BlockSink, bar):
+    """Journal the blocks of finished ``futures`` (waiting for them), each in its own
+    file (few blocks here, and a block's file is what a repair sets aside); the first
+    exception a future raised, or None."""
+    failed = None
+    for f in futures:
+        b = inflight.pop(f)
+        try:
+            record = f.result()
+        except Exception as exc:  # noqa: BLE001 -- raised by the caller, once
+            failed = failed or exc
+            continue
+        sink(b, record)
+        bar.update(len(plan.blocks[b]))
+    return failed
