@@ -8,7 +8,6 @@ run (paired, interleaved, median of repeats; thread CPU time). Prints the CPU mo
 from __future__ import annotations
 
 import argparse
-import platform
 import sys
 import time
 from pathlib import Path
@@ -20,18 +19,9 @@ sys.path[:0] = [str(ROOT), str(ROOT / "docs" / "examples")]
 
 from engine import Scene, Settings, registry  # noqa: E402
 from engine.batch import run_block  # noqa: E402
+from bench_maps import cpu_model  # noqa: E402  (/proc/cpuinfo's model name)
 
 GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
 
 
 def case(ref, own, points, **shared):
