@@ -83,6 +83,9 @@ class EarlyStart:
     ``(fn, *args)``, run on every worker once they are up (sweeps.workers.task.warm_up)."""
 
     def __init__(self, workers: int, dashboard: str | None, warm: tuple):
+        # an earlier run's cluster still stopping (close_later) stops first: two local
+        # clusters overlapping also undo each other's silenced dask logs
+        wait_for_stops()
         self._cm = dask_client(None, workers, dashboard)
         self._client = None
         self._error: BaseException | None = None
