@@ -36,7 +36,10 @@ class Dahl(FrictionLaw):
             su = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)
             r = 1.0 - p[P.SIGMA0] * z * su / p[P.FC]
             sr = 1.0 if r > 0.0 else (-1.0 if r < 0.0 else 0.0)
-            return u * sr * abs(r) ** p[ia]
+            a, ar = p[ia], abs(r)
+            # the common exponents without pow (the same numbers: |r|**1, |r|**2 are exact)
+            w = ar if a == 1.0 else (ar * ar if a == 2.0 else ar ** a)
+            return u * sr * w
 
         @b.jit(inline="always", error_model="numpy")
         def force_of(u, z, p):
