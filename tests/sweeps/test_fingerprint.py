@@ -32,6 +32,8 @@ v_d = [0.1]
 """
 
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 def engine_copy(tmp_path):
     return shutil.copytree(provenance.ENGINE_ROOT, tmp_path / "engine",
                            ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
@@ -134,7 +136,6 @@ import json, sys, warnings
 import sweeps.api, sweeps.lookup, sweeps.spec.load
 from sweeps.spec import parse_spec
 
-pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
                     "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
                              "v_ref": {{"start": 0.05, "stop": 1.0, "num": 9}}}}}})
