@@ -31,19 +31,17 @@ the engine starts a fresh cache; delete old ``numba-*`` folders at will.
 from __future__ import annotations
 
 import hashlib
-import os
 import secrets
 from pathlib import Path
 
 import numba
 import numpy
 
-from .provenance import fingerprint
+from .provenance import cache_root, fingerprint
 
 
 def cache_dir() -> Path:
-    base = os.environ.get("DITHERLAB_CACHE_DIR") or Path.home() / ".cache" / "ditherlab"
-    return Path(base) / f"numba-{fingerprint()}"
+    return cache_root() / f"numba-{fingerprint()}"
 
 
 def _use_engine_cache_dir() -> None:

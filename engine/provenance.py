@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 from pathlib import Path
 
 ENGINE_ROOT = Path(__file__).resolve().parent
@@ -34,3 +35,10 @@ def fingerprint() -> str:
     """The fingerprint of the engine in this process: :func:`source_hash` of
     ``engine/``, computed on the first call and cached."""
     return source_hash(ENGINE_ROOT)
+
+
+def cache_root() -> Path:
+    """The folder of ditherlab's caches: ``$DITHERLAB_CACHE_DIR``, else ``~/.cache/ditherlab``
+    (numba's kernels under ``numba-<fingerprint>``, engine.jit; batch jobs are pointed at it,
+    sweeps.workers.batch). The one place that decides it."""
+    return Path(os.environ.get("DITHERLAB_CACHE_DIR") or Path.home() / ".cache" / "ditherlab")

@@ -40,7 +40,7 @@ import store
 from store.catalogue import Catalogue
 from store.lease import HEARTBEAT_S, owner_tag
 
-from .run.progress import ATTACH_POLL_S, format_seconds, progress_text
+from .run.progress import ATTACH_POLL_S, clock_text, progress_text
 
 log = logging.getLogger("ditherlab")
 
@@ -232,5 +232,5 @@ def queue_hint(catalogue: Catalogue, rows: list[dict]) -> str | None:
     return None
 
 
-# format_seconds, progress_text: re-exported for sweeps.cli (status)
-__all__ = ["cancel", "enqueue", "format_seconds", "progress_text", "queue_hint", "serve"]
+# clock_text, progress_text: re-exported for sweeps.cli (status)
+__all__ = ["cancel", "clock_text", "enqueue", "progress_text", "queue_hint", "serve"]

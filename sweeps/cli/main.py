@@ -26,7 +26,7 @@ from contextlib import contextmanager
 
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
 from ..exports import MAPS, QUERY_FORMATS
-from ..workers.batch import KINDS as BATCH_KINDS
+from ..workers.batch import BATCH_KINDS
 from .gallery_commands import add_commands as add_gallery_commands
 from .web_commands import add_commands as add_web_commands
 from .reading import cmd_map, cmd_query, cmd_status

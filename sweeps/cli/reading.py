@@ -131,7 +131,7 @@ def _shown(row: dict, live: str) -> dict:
     """A catalogue row for ``status SWEEP``: times readable, progress and ETA added."""
     import time
 
-    from ..service import format_seconds, progress_text
+    from ..service import clock_text, progress_text
 
     shown = {k: v for k, v in row.items() if k not in ("spec_json", "aliases")}
     earlier = [a for a in str(row.get("aliases") or "").splitlines() if a and a != row["name"]]
@@ -147,7 +147,7 @@ def _shown(row: dict, live: str) -> dict:
     elif live == "failed":
         shown["error"] = row["message"]
     if started and live != "running" and row["state"] != "queued":
-        shown["run_took"] = format_seconds(
+        shown["run_took"] = clock_text(
             _seconds_between(started, row["updated"]))
     return shown
 

@@ -21,7 +21,9 @@ def eta_s(row: dict, now: float | None = None) -> float | None:
     return max(total - done, 0) / rate
 
 
-def format_seconds(s: float | None) -> str:
+def clock_text(s: float | None) -> str:
+    """A duration as a clock reads it (``25 s``, ``3 min 05 s``, ``1 h 02 min``): ETAs and
+    run times; estimates of cost are :func:`sweeps.estimates.time_estimate.format_seconds`."""
     if s is None:
         return "?"
     s = round(s)
@@ -38,7 +40,7 @@ def progress_text(row: dict) -> str:
     done = int(row["done_blocks"])
     text = f"{done}/{row['n_blocks']} blocks ({100 * done / total:.0f} %)"
     eta = eta_s(row)
-    return text + (f", ETA {format_seconds(eta)}" if eta is not None else "")
+    return text + (f", ETA {clock_text(eta)}" if eta is not None else "")
 
 
 def attach(catalogue: Catalogue, sweep_id: str, *, progress: bool = True,

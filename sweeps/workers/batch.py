@@ -21,20 +21,18 @@ and jobs whose worker idles once fewer blocks are left than workers end
 from __future__ import annotations
 
 import logging
-import os
 import shlex
 import signal
 import sys
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 from ..errors import RefusedError
 
 log = logging.getLogger("ditherlab")
 
-KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
+BATCH_KINDS = {"slurm": "SLURMCluster", "pbs": "PBSCluster", "sge": "SGECluster"}
 JOB_START_S = 8.0   # sbatch to a joined worker on an idle queue: 8.3 s measured on the
                     # single-node test Slurm with the 2 cores shared (docs/BATCH.md); a
                     # busy queue adds its wait
@@ -48,8 +46,8 @@ class BatchWorkers:
     jobs: int = 4
 
     def __post_init__(self):
-        if self.kind not in KINDS:
-            raise RefusedError(f"--cluster {self.kind}: choose one of {', '.join(KINDS)}")
+        if self.kind not in BATCH_KINDS:
+            raise RefusedError(f"--cluster {self.kind}: choose one of {', '.join(BATCH_KINDS)}")
         jobqueue()   # refused now if missing; imported on the main thread (see there)
 
     def for_blocks(self, n_blocks: int) -> BatchWorkers:
@@ -82,7 +80,9 @@ def job_options(kind: str, dashboard: str | None = None) -> dict:
     if not any(a.startswith("--dashboard") or a == "--no-dashboard" for a in extra):
         extra.append("--no-dashboard")
     options["worker_extra_args"] = extra
-    cache = os.environ.get("DITHERLAB_CACHE_DIR") or Path.home() / ".cache" / "ditherlab"
+    from engine.provenance import cache_root   # hashlib and pathlib only
+
+    cache = cache_root()
     # PYTHONSAFEPATH: a job starts in the submitter's folder, and `python -m` would put it
     # first on sys.path, where a store named `store` hides the package (Python >= 3.11)
     options["job_script_prologue"] = [f"export DITHERLAB_CACHE_DIR={shlex.quote(str(cache))}",
@@ -93,7 +93,7 @@ def job_options(kind: str, dashboard: str | None = None) -> dict:
 
 def make_cluster(kind: str, dashboard: str | None = None):
     """A dask-jobqueue cluster of ``kind`` (no job submitted yet)."""
-    cluster = getattr(jobqueue(), KINDS[kind])(**job_options(kind, dashboard))
+    cluster = getattr(jobqueue(), BATCH_KINDS[kind])(**job_options(kind, dashboard))
     address = cluster.scheduler_address
     if "127.0.0.1" in address or "localhost" in address:
         log.info("%s jobs report to %s (loopback: workers on other nodes need the interface "

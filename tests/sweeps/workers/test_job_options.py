@@ -9,7 +9,7 @@ import dask
 import pytest
 
 from sweeps.errors import RefusedError
-from sweeps.workers.batch import KINDS, job_options, jobqueue
+from sweeps.workers.batch import BATCH_KINDS, job_options, jobqueue
 
 SLURM = {"jobqueue.slurm.memory": "2GB"}
 
@@ -18,7 +18,7 @@ def _script(kind: str, options: dict) -> str:
     """The job script of one worker job, as the cluster would submit it (no scheduler, no
     queue: the job class alone)."""
     module = jobqueue()
-    job = getattr(module, KINDS[kind]).job_cls   # SLURMJob for SLURMCluster, ...
+    job = getattr(module, BATCH_KINDS[kind]).job_cls   # SLURMJob for SLURMCluster, ...
     kw = {k: v for k, v in options.items() if k != "scheduler_options"}
     return job(scheduler="tcp://127.0.0.1:8786", name="w", **kw).job_script()
 
@@ -59,7 +59,7 @@ def test_the_site_configuration_wins_where_it_speaks(monkeypatch):
     assert "--interface ib0" in script and "--nworkers 4" in script
 
 
-@pytest.mark.parametrize("kind", sorted(KINDS))
+@pytest.mark.parametrize("kind", sorted(BATCH_KINDS))
 def test_a_job_without_its_memory_is_refused_saying_how_to_set_it(kind):
     with dask.config.set({f"jobqueue.{kind}.memory": None}):
         with pytest.raises(RefusedError, match=rf"jobqueue\.{kind}\.memory .* "
