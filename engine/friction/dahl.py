@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from .. import params as P
 from ..contract import FrictionLaw, LawKernels, Param
+from .laws import steady_curve
 
 
 class Dahl(FrictionLaw):
@@ -75,12 +76,4 @@ class Dahl(FrictionLaw):
         return LawKernels(rates, force, 2, switches, init, scales)
 
     def build_steady(self, b):
-        viscous = b.scene.viscous
-
-        @b.jit(error_model="numpy")
-        def steady(u, p):
-            F = p[P.FC] * (1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0))
-            if viscous:
-                F += p[P.SIGMA2] * u
-            return F
-        return steady
+        return steady_curve(b, stribeck=False)   # fc sgn(u) + sigma2 u

@@ -162,20 +162,26 @@ class _Builtin(FrictionLaw):
         return LawKernels(rates, force, n_switches, switches, init, scales)
 
     def build_steady(self, b):
-        from .stribeck import make_g
-        g = make_g(b.scene.stribeck and self.name != "coulomb", b.scene.delta)
-        viscous = b.scene.viscous
-
-        @b.jit(error_model="numpy")
-        def steady(u, p):
-            F = g(u, p) * (1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0))
-            if viscous:
-                F += p[P.SIGMA2] * u
-            return F
-        return steady
+        return steady_curve(b, b.scene.stribeck and self.name != "coulomb")
 
     def effects(self, scene):
         return {"elasto-plastic phases": True} if self.name == "elastoplastic" else {}
+
+
+def steady_curve(b, stribeck: bool):
+    """njit ``steady(u, p) = g(u) sgn(u) [+ sigma2 u]``, the friction at constant sliding
+    velocity ``u`` (``g = fc`` without the Stribeck effect): the averaged path's curve of the
+    laws whose bristles settle at ``z_ss`` (engine.analysis.steady)."""
+    g = make_g(stribeck, b.scene.delta)
+    viscous = b.scene.viscous
+
+    @b.jit(error_model="numpy")
+    def steady(u, p):
+        F = g(u, p) * (1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0))
+        if viscous:
+            F += p[P.SIGMA2] * u
+        return F
+    return steady
 
 
 BUILTIN = (
