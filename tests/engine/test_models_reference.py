@@ -19,6 +19,9 @@ import pytest
 from engine import Scene, Settings, registry, simulate
 from sweeps.spec.accuracy import LEVELS, TARGET_ERROR
 
+# long: trajectories at tight tolerances (minutes on 2 cores); CI runs them (.ci/run)
+pytestmark = pytest.mark.long
+
 REFS = json.loads((Path(__file__).with_name("model_references.json")).read_text())
 
 

@@ -10,6 +10,9 @@ from scipy.integrate import trapezoid
 
 from engine import Scene, Settings, registry, simulate
 
+# long: trajectories at tight tolerances (minutes on 2 cores); CI runs them (.ci/run)
+pytestmark = pytest.mark.long
+
 OWN = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
 OUTS = ("hunt_amplitude", "hunt_period", "steady_error", "stick_fraction")
 
