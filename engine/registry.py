@@ -61,6 +61,10 @@ def system(ref: str) -> MechanicalSystem:
     return resolve("system", ref)
 
 
+#: import path -> digest of the source this process imported it from (set by :func:`resolve`)
+IMPORTED: dict[str, str | None] = {}
+
+
 @functools.cache
 def resolve(kind: str, ref: str):
     """The model ``ref`` names (a built-in name or an import path), or ModelError."""
@@ -78,6 +82,7 @@ def resolve(kind: str, ref: str):
                          + ", or an import path 'module:Name' of your own")
     module_name, _, attr = ref.rpartition(":")
     module = _import(kind, ref, module_name)
+    IMPORTED[ref] = source_digest(ref)   # the source this process runs (engine.systems)
     if not hasattr(module, attr):
         public = [n for n in dir(module) if not n.startswith("_")]
         hint = difflib.get_close_matches(attr, public, n=1)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from .. import params as P
 from ..contract import FrictionLaw, LawKernels, Param
-from .laws import steady_curve
+from .laws import bristle_state, steady_curve
 
 
 class Dahl(FrictionLaw):
@@ -64,15 +64,7 @@ class Dahl(FrictionLaw):
             su = 1.0 if u > 0.0 else (-1.0 if u < 0.0 else 0.0)
             g[1] = 1.0 - p[P.SIGMA0] * y[Z] * su / p[P.FC]
 
-        @b.jit(inline="always", error_model="numpy")
-        def init(p, y):
-            y[Z] = p[P.Z0]
-
-        @b.jit(inline="always", error_model="numpy")
-        def scales(p, out):
-            fc = abs(p[P.FC])
-            out[Z] = (fc if fc > 0.0 else 1.0) / p[P.SIGMA0]
-
+        init, scales = bristle_state(b)
         return LawKernels(rates, force, 2, switches, init, scales)
 
     def build_steady(self, b):

@@ -149,16 +149,7 @@ class _Builtin(FrictionLaw):
         def switches(u, y, hold, p, g):
             kinks(u, y[Z], hold, p, g)
 
-        @b.jit(inline="always", error_model="numpy")
-        def init(p, y):
-            y[Z] = p[P.Z0]
-
-        @b.jit(inline="always", error_model="numpy")
-        def scales(p, out):
-            fc = abs(p[P.FC])
-            fc = fc if fc > 0.0 else 1.0
-            out[Z] = fc / p[P.SIGMA0] if p[P.SIGMA0] > 0.0 else 1.0
-
+        init, scales = bristle_state(b)
         return LawKernels(rates, force, n_switches, switches, init, scales)
 
     def build_steady(self, b):
@@ -166,6 +157,24 @@ class _Builtin(FrictionLaw):
 
     def effects(self, scene):
         return {"elasto-plastic phases": True} if self.name == "elastoplastic" else {}
+
+
+def bristle_state(b):
+    """njit ``(init, scales)`` of one bristle deflection at ``b.z0``: ``z0`` from ``p``, and
+    its natural scale ``fc / sigma0`` (1 where either vanishes)."""
+    Z = b.z0
+
+    @b.jit(inline="always", error_model="numpy")
+    def init(p, y):
+        y[Z] = p[P.Z0]
+
+    @b.jit(inline="always", error_model="numpy")
+    def scales(p, out):
+        fc = abs(p[P.FC])
+        fc = fc if fc > 0.0 else 1.0
+        out[Z] = fc / p[P.SIGMA0] if p[P.SIGMA0] > 0.0 else 1.0
+
+    return init, scales
 
 
 def steady_curve(b, stribeck: bool):

@@ -44,13 +44,15 @@ class System(NamedTuple):
 
 def build_context(scene, jit=njit) -> tuple:
     """``(law, system, Build)`` of ``scene``: its models and their layout in y and p."""
-    for ref, digest in scene.digests:
-        here = registry.source_digest(ref)
-        if here != digest:
-            raise ModelError(f"{ref}: this process's copy of the module (source {here}) is not "
-                             f"the one the sweep was planned with (source {digest}); run the "
-                             "workers with the same file")
     law, sysm = registry.law(scene.friction), registry.system(scene.system)
+    for ref, digest in scene.digests:
+        # the source this process imported (a long-lived serve keeps the module it imported
+        # first: an edit since then must not be run under the new source's sweep id)
+        here = registry.IMPORTED.get(ref)
+        if here != digest:
+            raise ModelError(f"{ref}: this process runs the module's source {here}, not the "
+                             f"one the sweep was planned with ({digest}); run the workers "
+                             "with the same file, and restart a serve after an edit")
     if scene.dither not in sysm.dithers:
         raise ModelError(f"dither: {scene.dither!r} is not one the {sysm.name} system takes "
                          f"({', '.join(sysm.dithers)})")
