@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-
+from ..helpers import SIMULATE_SPEC
 
 SCRIPT = Path(__file__).resolve().parents[2] / "scripts" / "fault_campaign.py"
 

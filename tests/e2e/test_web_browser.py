@@ -94,7 +94,7 @@ def test_the_pages_in_a_browser(browser, server, web_store, running, shots, tmp_
         page.click("#dl-csv")
     got = Path(dl.value.path()).read_bytes()
     cli = ditherlab("query", web_store["avg"], "--format", "csv", "--sel", "v_d=0.1",
-                    "--store", str(web_store["root"]))
+                    "--store", str(web_store["root"]), text=False)
     assert got == cli.stdout and got.count(b"\n") == 21 * 25 + 1
 
     # the explorer: a click computes and shows a chart

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
+
 ROOT = Path(__file__).resolve().parents[2]
 CYCLE = """
 import sys
@@ -18,8 +20,6 @@ sys.path.insert(0, {here!r})
 import numpy as np
 import store
 from storetest_cubes import averaged_cube
-
-pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
 root = sys.argv[1]
 sweep = store.SweepDir(root, "c0ffee")
