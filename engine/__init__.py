@@ -7,11 +7,11 @@ import lazy_loader as _lazy
 
 __getattr__, __dir__, __all__ = _lazy.attach(
     __name__,
-    submodules=["analysis", "batch", "dither", "friction", "integrators", "jit", "observables",
+    submodules=["analysis", "blocks", "dither", "friction", "integrators", "jit", "observables",
                 "outputs", "params", "provenance", "scene", "settings", "status", "systems"],
     submod_attrs={
         "api": ["Simulation", "simulate"],
-        "batch": ["POINT_AXES", "BlockResult", "run_block"],
+        "blocks": ["POINT_AXES", "BlockResult", "run_block"],
         "integrators": ["METHODS"],
         "params": ["pack", "unpack"],
         "provenance": ["fingerprint"],

@@ -78,7 +78,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     """
     if scene.path in ANALYSIS_PATHS:
         raise ValueError(f"scene.path: simulate() integrates in time; {scene.path!r} is "
-                         "an analysis path, use engine.batch.run_block")
+                         "an analysis path, use engine.blocks.run_block")
     p = pack_for(scene, p) if isinstance(p, dict) else np.ascontiguousarray(p, dtype=np.float64)
     if p.shape != (scene.n_params,):
         raise ValueError(f"p: expected {scene.n_params} parameters for this scene "

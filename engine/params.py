@@ -50,7 +50,7 @@ NAMES = (
     "long_stick", "stick_band", "e0", "v0", "z0", "slip_gap", "alpha_near",
 )
 INDEX = {name: i for i, name in enumerate(NAMES)}
-#: The columns of a block's ``points`` (engine.batch.run_block): the parameters the four
+#: The columns of a block's ``points`` (engine.blocks.run_block): the parameters the four
 #: axes of a sweep set, in the cube's axis order (the cube and the spec spell vd ``v_d``).
 POINT_AXES = ("W", "omega", "v_ref", "vd")
 

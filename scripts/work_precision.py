@@ -8,7 +8,7 @@ scene, parameters and point are exactly those the sweep service would build thro
 ``sweeps.planning.plan.make_plan``) every integrator of ``engine.integrators.METHODS`` is run over
 its step/tolerance ladder (:data:`LADDERS`): ``rk4`` over steps per (half-)period (or the
 step ``h`` without dither), ``dopri5`` and ``rodas4`` over ``rtol`` with
-``atol = ATOL_RATIO * rtol``. Each run is timed through ``engine.batch.run_block`` (one
+``atol = ATOL_RATIO * rtol``. Each run is timed through ``engine.blocks.run_block`` (one
 point, numba compiled beforehand, median of ``--repeats`` wall times).
 
 Error of a queried output ``q`` against the scene's reference ``q_ref``

@@ -25,7 +25,7 @@ import wp_core as wp
 
 from engine import params as P
 from engine import status as S
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.scene import Scene
 from engine.settings import Settings
 

@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 from engine import params as P
 from engine import status as S
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.settings import Settings
 from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec

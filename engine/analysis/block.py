@@ -1,4 +1,4 @@
-"""Entry point of the analysis paths for the batch layer (engine.batch.run_block).
+"""Entry point of the analysis paths for the batch layer (engine.blocks.run_block).
 
 ``analysis_block(scene, points, p)`` evaluates a block of grid points without time
 integration:
@@ -143,7 +143,7 @@ def analysis_block(scene, points, p, *, n_quad=N_QUAD, side=1.0, hbm_rtol=HBM_RT
     """
     if scene.path not in ("averaged", "hbm"):
         raise ValueError(f"scene.path: analysis_block needs 'averaged' or 'hbm', "
-                         f"got {scene.path!r}; time integration is engine.batch.run_block")
+                         f"got {scene.path!r}; time integration is engine.blocks.run_block")
     names = _requested(scene)
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 4:

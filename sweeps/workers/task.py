@@ -44,7 +44,7 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
     per block to that file: pid and :func:`block_key` (how the tests count block
     computations across processes).
     """
-    from engine.batch import run_block
+    from engine.blocks import run_block
 
     if scene not in _COMPILED:   # the first block of a scene in this process
         warm_up(scene, p, settings)
@@ -117,7 +117,7 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     (engine.jit) holding that scene's lock file there, and the others, waiting for the
     lock, load it from the cache instead of compiling it again (:func:`compile_lock`).
     Calls the engine directly, not compute_block: no ``$DITHERLAB_BLOCK_LOG`` line."""
-    from engine.batch import run_block
+    from engine.blocks import run_block
 
     t0 = time.perf_counter()
     q = p.copy()

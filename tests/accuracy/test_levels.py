@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from engine import status as S
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.settings import Settings
 from sweeps.spec.accuracy import TARGET_ERROR
 from sweeps.planning.plan import make_plan

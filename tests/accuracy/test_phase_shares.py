@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from engine import params as P
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.phase_book import share_above
 from sweeps.spec.accuracy import promise
 from sweeps.planning.plan import make_plan

@@ -18,7 +18,7 @@ import pytest
 
 from engine import params as P
 from engine import status as S
-from engine.batch import run_block
+from engine.blocks import run_block
 from sweeps.spec.accuracy import promise
 from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec

@@ -21,7 +21,7 @@ import pytest
 from engine import params as P
 from engine.analysis.cubic import max_real_root, max_root, plus_det2
 from engine.analysis.stability import jacobian_max_real_eig, linearisation, max_real_eig
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.scene import Scene
 
 EPS = np.finfo(float).eps
@@ -59,7 +59,7 @@ def _lapack_and_tolerance(J):
 @pytest.fixture(scope="module", params=[0.1, 0.01], ids=["vd=0.1", "vd=0.01"])
 def fig09(request):
     """specs/fig09.toml's averaged scene and (W, v_ref) ranges at 400 x 400, one vd,
-    through engine.batch.run_block as a sweep computes it."""
+    through engine.blocks.run_block as a sweep computes it."""
     vd = request.param
     grid = tomllib.loads(SPEC.read_text())["grid"]
     assert vd in grid["v_d"]

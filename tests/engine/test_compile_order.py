@@ -27,7 +27,7 @@ BLOCKS = """
 import sys, numpy as np
 from sweeps.spec import load_spec
 from sweeps.planning.plan import make_plan
-from engine.batch import run_block
+from engine.blocks import run_block
 plan = make_plan(load_spec(sys.argv[1]))
 res = {}
 for b in range(len(plan.blocks)):

@@ -10,7 +10,7 @@ import pytest
 PROBE = """
 import json, time, numpy as np
 from engine import params as P
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.kernels import block_kernel
 from engine.scene import Scene
 from engine.settings import Settings
@@ -60,7 +60,7 @@ def test_distinct_closures_get_distinct_uuids():
 PAIR = """
 import json, sys, numpy as np
 from engine import params as P
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.scene import Scene
 from engine.settings import Settings
 base = Scene(friction="lugre", dither="none", integrator="rk4", outputs=("v_mean", "F_mean"))

@@ -1,4 +1,4 @@
-"""The batch entry point's contract (docs/ARCHITECTURE.md, engine/batch.py) and the
+"""The batch entry point's contract (docs/ARCHITECTURE.md, engine/blocks.py) and the
 one-trajectory API: shapes, status codes per point, counters, cost apportioning, the
 analysis-path dispatch, and every error message a caller can see."""
 import sys
@@ -10,7 +10,7 @@ import pytest
 from engine import params as P
 from engine import status as S
 from engine.api import simulate
-from engine.batch import POINT_AXES, BlockResult, run_block
+from engine.blocks import POINT_AXES, BlockResult, run_block
 from engine.scene import Scene
 from engine.settings import Settings
 from tests.engine.common import ALL, scene

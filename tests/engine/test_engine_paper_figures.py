@@ -23,7 +23,7 @@ import pytest
 from engine import params as P
 from engine import status as S
 from engine.api import simulate
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.settings import Settings
 from tests.engine.common import scene
 

@@ -13,7 +13,7 @@ import pytest
 
 from engine import params as P
 from engine.api import simulate
-from engine.batch import run_block
+from engine.blocks import run_block
 from engine.scene import Scene
 from engine.settings import Settings
 

@@ -168,7 +168,7 @@ def test_the_computing_path_holds_every_module_a_run_loads(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     ours = {m for m in json.loads(proc.stdout.splitlines()[-1])
             if m.split(".")[0] in version.PACKAGES}
-    assert {"sweeps.run.submit", "sweeps.workers.task", "engine.batch", "store.journal"} <= ours, ours
+    assert {"sweeps.run.submit", "sweeps.workers.task", "engine.blocks", "store.journal"} <= ours, ours
     missing = sorted(ours - set(version.computing_path()))
     assert not missing, f"loaded by a run but not in the results fingerprint: {missing}"
 
