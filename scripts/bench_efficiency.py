@@ -67,6 +67,7 @@ t0 = time.perf_counter()
 import numpy as np
 from sweeps.spec.load import load_spec
 from sweeps.planning.plan import make_plan
+from sweeps.run.phases import shown
 from sweeps.run.submit import submit
 import store
 
@@ -89,7 +90,7 @@ plan = make_plan(load_spec(spec))
 shown = Stamped()
 sys.stderr = shown
 t1 = time.perf_counter()
-res = submit(plan, root, workers=workers, progress=True)
+res = submit(plan, root, workers=workers, progress=shown(True))
 t2 = time.perf_counter()
 sys.stderr = sys.__stderr__
 cube = store.read_cube(res.cube_path)

@@ -39,14 +39,21 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
         ``sweep_id``, ``state``, counts and ``cube_path``; open the cube with
         :func:`open_sweep`. Raises :class:`sweeps.SpecError` for a refused spec.
     """
+    from .estimates.time_history import record_run
     from .planning.plan import make_plan
+    from .run.phases import shown
     from .run.submit import submit
+    from .workers.compute import Compute
 
     _refuse_in_spawned_import()
     if not isinstance(spec, Spec):
         spec = load_spec(spec, max_points=max_points)
-    return submit(make_plan(spec), store_root(store), scheduler=scheduler, workers=workers,
-                  progress=progress, client=client, dashboard=dashboard)
+    plan, root = make_plan(spec), store_root(store)
+    compute = Compute.chosen(workers=workers, scheduler=scheduler, client=client,
+                             dashboard=dashboard)
+    res = submit(plan, root, compute, progress=shown(progress))
+    record_run(root, plan, res)
+    return res
 
 
 def _refuse_in_spawned_import() -> None:

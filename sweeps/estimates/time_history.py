@@ -1,8 +1,10 @@
 """How far off were the plan's estimates? A small record in the store.
 
 ``ditherlab plan`` writes its estimate of each level to ``<store>/estimates.json``;
-``submit`` adds the measured wall time when the same sweep finishes at that level; the
-next ``plan`` prints how the last estimate compared with reality.
+``submit`` adds the measured wall time when the same sweep finishes at that level
+(:func:`record_run`, called by the runner's callers: the command line, ``run_sweep``,
+serve); the next ``plan`` prints how the last estimate compared with reality. No number of
+a cube comes from here: off the computing path (sweeps.version).
 """
 from __future__ import annotations
 
@@ -39,6 +41,14 @@ def record_actual(root: Path, sweep_id: str, level: str, wall_s: float) -> None:
     if sweep_id in data and level in data[sweep_id]["estimated_s"]:
         data[sweep_id].setdefault("actual_s", {})[level] = wall_s
         _save(root, data)
+
+
+def record_run(root: Path, plan, result) -> None:
+    """After a run (a :class:`sweeps.run.outcome.SubmitResult`): its measured compute time,
+    when it computed blocks and ran to its end (every point final, not stopped)."""
+    if "compute_s" in result.timings and result.state in ("done", "partial"):
+        record_actual(Path(root), plan.sweep_id, plan.numerics.label,
+                      result.timings["compute_s"])
 
 
 def recorded(root: Path, sweep_id: str) -> dict:

@@ -13,6 +13,7 @@ from store.lease import HEARTBEAT_S, owner_tag
 
 log = logging.getLogger("ditherlab")
 
+ATTACH_POLL_S = 0.5        # a submitter waiting for another's run reads the catalogue this often
 PROGRESS_EVERY_S = 0.5     # a runner writes its counts to the catalogue at most this often
 CANCEL_POLL_S = 0.25       # ... and asks whether it was cancelled at most this often
 
@@ -112,3 +113,19 @@ class Lease:
         changed, _ = self.catalogue.finish(self.sweep_id, state, owner=self.owner,
                                            message=message, **counts)
         return changed
+
+
+def wait_while_held(catalogue: Catalogue, sweep_id: str, show=None,
+                    poll_s: float = ATTACH_POLL_S) -> dict:
+    """Wait while another live process runs the sweep (a second submitter attaches: it
+    computes nothing), calling ``show(row)`` on every poll (its display's, sweeps.run.quiet);
+    returns the row once nobody holds the lease (final, queued or stalled), with
+    ``attached_to``: the owner it waited for."""
+    row = catalogue.get(sweep_id)
+    holder = row["owner"]
+    while row["state"] == "running" and Catalogue.alive(row):
+        if show is not None:
+            show(row)
+        time.sleep(poll_s)
+        row = catalogue.get(sweep_id)
+    return {**row, "attached_to": holder}

@@ -3,7 +3,11 @@ blocks, with the error estimate's finer re-runs that run among them counted besi
 ``error estimate k/N``), the re-runs still running after the last point (``error estimate
 k/N``, a bar of its own) and the cube's last publish. Each phase is named when it starts, so the display never sits at "99 %" while
 work it does not mention goes on (the estimate's re-runs took ~20 s on a 100-point draft
-Fig. 14 sweep, after the last point)."""
+Fig. 14 sweep, after the last point).
+
+The runner never imports this module: its caller (the command line, ``run_sweep``, serve)
+hands it a display, :func:`shown` (sweeps.run.quiet: the methods a display has). So the
+display is off the computing path (sweeps.version), and its wording can change freely."""
 from __future__ import annotations
 
 import functools
@@ -86,3 +90,35 @@ def compiling(enabled: bool) -> Timer:
     """Said after NOTICE_AFTER_S of a kernel's warm-up (sweeps.run.local, the cluster's)."""
     return Timer("ditherlab: compiling the engine for this scene (its first run here; cached "
                  "for later runs)", enabled)
+
+
+class Shown:
+    """The display of a run shown on stderr (sweeps.run.quiet names its methods)."""
+
+    def bar(self, plan, phase: str, total: int, unit: str, initial: int = 0):
+        return bar(plan, phase, total, unit, True, initial)
+
+    def display(self, plan):
+        return display(plan, True)
+
+    def starting(self, plan, workers) -> Timer:
+        return starting(plan, workers, True)
+
+    def compiling(self) -> Timer:
+        return compiling(True)
+
+    def say(self, plan, phase: str) -> None:
+        say(plan, phase, True)
+
+    def note(self, text: str) -> None:
+        print(text, file=sys.stderr, flush=True)
+
+    def attached(self, sweep_id: str):
+        from .progress import attached_lines
+
+        return attached_lines(sweep_id)
+
+
+def shown(progress: bool):
+    """The display a caller hands the runner: :class:`Shown`, or False (nothing shown)."""
+    return Shown() if progress else False

@@ -1,14 +1,13 @@
 """A running sweep as other processes see it: its ETA and progress line (``status``), and
-:func:`attach`, which waits while another live process runs the sweep, printing its
-progress (a second submitter of a running sweep; sweeps.service)."""
+what a second submitter of a running sweep shows while it waits (:func:`attached_lines`;
+the wait is sweeps.run.lease_holder.wait_while_held). Display only: off the computing
+path (sweeps.run.quiet)."""
 from __future__ import annotations
 
 import sys
 import time
 
-from store.catalogue import Catalogue
-
-ATTACH_POLL_S = 0.5        # an attached submitter reads the catalogue this often
+from .lease_holder import ATTACH_POLL_S  # noqa: F401 -- serve's poll (sweeps.service)
 
 
 def eta_s(row: dict, now: float | None = None) -> float | None:
@@ -43,24 +42,31 @@ def progress_text(row: dict) -> str:
     return text + (f", ETA {clock_text(eta)}" if eta is not None else "")
 
 
-def attach(catalogue: Catalogue, sweep_id: str, *, progress: bool = True,
-           poll_s: float = ATTACH_POLL_S, out=None) -> dict:
-    """Wait while another live process runs the sweep, printing its progress; returns the
-    row once nobody holds the lease (final, queued or stalled), with ``attached_to``: the
-    owner it waited for."""
-    out = out or sys.stderr
-    row = catalogue.get(sweep_id)
-    holder = row["owner"]
-    if progress:
-        print(f"sweep {sweep_id} is running in {row['owner']}: attaching (this process "
-              "computes nothing; Ctrl-C detaches and leaves it running)", file=out, flush=True)
-    last = ""
-    while row["state"] == "running" and Catalogue.alive(row):
-        if progress:
-            text = progress_text(row)
-            if text != last:
-                print(f"  {sweep_id}: {text}", file=out, flush=True)
-                last = text
-        time.sleep(poll_s)
-        row = catalogue.get(sweep_id)
-    return {**row, "attached_to": holder}
+def attached_lines(sweep_id: str, out=None):
+    """``show(row)`` for a submitter waiting while another live process runs the sweep
+    (sweeps.run.lease_holder.wait_while_held): a first line saying so, then the running
+    row's progress each time it changes."""
+    last = [None]
+
+    def show(row: dict) -> None:
+        stream = out or sys.stderr
+        if last[0] is None:
+            print(f"sweep {sweep_id} is running in {row['owner']}: attaching (this process "
+                  "computes nothing; Ctrl-C detaches and leaves it running)",
+                  file=stream, flush=True)
+        text = progress_text(row)
+        if text != last[0]:
+            print(f"  {sweep_id}: {text}", file=stream, flush=True)
+            last[0] = text
+
+    return show
+
+
+def attach(catalogue, sweep_id: str, *, progress: bool = True, poll_s: float = ATTACH_POLL_S,
+           out=None) -> dict:
+    """:func:`sweeps.run.lease_holder.wait_while_held`, showing :func:`attached_lines`
+    (the runner's call before its display was handed in; kept for callers of that time)."""
+    from .lease_holder import wait_while_held
+
+    return wait_while_held(catalogue, sweep_id, attached_lines(sweep_id, out) if progress
+                           else None, poll_s)

@@ -10,6 +10,7 @@ import pytest
 
 from sweeps.planning.plan import make_plan
 from sweeps.run import submit as submit_module
+from sweeps.run.phases import shown
 from sweeps.run.submit import submit
 from sweeps.estimates.error_reruns import SampleRuns
 from sweeps.spec import parse_spec
@@ -55,7 +56,7 @@ def test_a_submit_names_its_phases_in_order(tmp_path, capfd, monkeypatch, where)
         monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
     plan = make_plan(parse_spec(SPEC))
     n_rerun = len(SampleRuns(plan).order)
-    res = submit(plan, tmp_path / "store", progress=True)
+    res = submit(plan, tmp_path / "store", progress=shown(True))
     assert res.state == "done", res.message
     assert ("cluster_s" in res.timings) == (where == "cluster"), res.timings
     states = _states(capfd.readouterr().err, plan)
@@ -81,7 +82,7 @@ def test_a_quiet_submit_shows_nothing(tmp_path, capfd):
     assert submit(plan, tmp_path / "store", progress=False).state == "done"
     assert _states(capfd.readouterr().err, plan) == []
     plan = make_plan(parse_spec({**avg, "grid": {"W": [0.0, 0.4], "v_ref": [0.1, 0.5]}}))
-    assert submit(plan, tmp_path / "store", progress=True).state == "done"
+    assert submit(plan, tmp_path / "store", progress=shown(True)).state == "done"
     phases = [s.split(":")[0] for s in _states(capfd.readouterr().err, plan)]
     assert phases[0] == "points" and phases[-1] == "publishing the cube", phases
 
