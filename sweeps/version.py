@@ -11,7 +11,14 @@ names numba's cache). An edit of any module on that path -- even a comment -- ma
 sweep ids, and old cubes are stale; a module off it (the command line, the read side, the
 gallery) can change freely. Over-inclusion costs a recomputation, a miss a wrong answer
 served as current: ``tests/sweeps/test_fingerprint.py`` runs sweeps and fails if they load
-a module of ours that the path does not hold.
+a module of ours that the path does not hold, and holds the reviewed list of the path's
+modules (``COMPUTING_PATH``: a module joining or leaving it shows in a diff).
+
+Code that cannot change a number stays off the path by structure, not by a list here: the
+runner is handed its progress display (sweeps.run.quiet; the bars are sweeps.run.phases),
+its callers record the time history (sweeps.estimates.time_history.record_run), and the
+tests' gates are found by name in tests/hooks (sweeps.workers.task.HOOKS_MODULE). None of
+them is imported by a module on the path, and nothing they return is computed with.
 
 Only the standard library here: ``ditherlab --help`` must not pay for numerics.
 """

@@ -18,7 +18,10 @@ import time
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
+from .hooks.ditherlab_test_hooks import GATE_ENV, RERUN_GATE_ENV  # noqa: F401 (tests import them here)
+
 BIN = Path(sys.executable).parent / "ditherlab"
+HOOKS = Path(__file__).resolve().parent / "hooks"   # the tests' hooks in a worker's task
 TIMING = ("cost_s",)   # wall-clock seconds differ between runs; everything else must not
 
 
@@ -60,8 +63,19 @@ v_d = [0.1]
 """
 
 
+def gated(env: dict, path, var: str = GATE_ENV) -> dict:
+    """``env`` (changed, returned) with the gate at ``path`` (a :class:`BlockGate`'s FIFO or
+    a folder of tickets) in ``var`` (``$DITHERLAB_BLOCK_GATE``, or ``RERUN_GATE_ENV`` for the
+    error estimate's re-runs), and the tests' hooks (tests/hooks/ditherlab_test_hooks.py) on
+    the ``PYTHONPATH`` of the processes started with it and their dask workers: the task
+    finds the gates there (sweeps.workers.task.HOOKS_MODULE)."""
+    paths = [str(HOOKS)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
+    env.update({var: str(path), "PYTHONPATH": os.pathsep.join(dict.fromkeys(paths))})
+    return env
+
+
 class BlockGate:
-    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate): a FIFO every block
+    """The test's end of ``$DITHERLAB_BLOCK_GATE`` (tests/hooks, :func:`gated`): a FIFO every block
     computation takes a byte from before it starts. ``let(n)`` lets n more blocks start;
     ``open()`` lets every block start from now on. Held shut from creation."""
 

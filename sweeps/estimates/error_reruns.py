@@ -15,7 +15,6 @@ from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
-from ..workers.block_gate import RERUN_GATE_ENV
 from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
@@ -83,7 +82,7 @@ class SampleRuns:
         self.futures[i] = client.submit(task.compute_block, self.scene,
                                         self.points[i:i + 1], self.plan.params,
                                         self.finer.settings, self.index[i:i + 1],
-                                        gate=RERUN_GATE_ENV, pure=False)
+                                        kind="rerun", pure=False)
         return True
 
     def gather(self, client, tick=None, idle=None) -> BlockRecord:

@@ -18,7 +18,7 @@ from ..workers.cluster import dask_client
 from ..workers.matching import matched
 from ..planning.plan import Plan, blocks_per_task, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
-from . import interrupt, phases
+from . import interrupt
 from .sink import BlockSink
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
@@ -63,7 +63,7 @@ def finish_estimate(plan: Plan, client, todo, sink: BlockSink, timings, sample,
     if sink.stopped is None and (needs_estimate(plan, sink.sweep, sink.cube) or
                                  (todo and plan.path == "simulate" and complete(sink.cube))):
         estimate_into(plan, client, sink.cube, sink.sweep, timings, started=sample,
-                      display=phases.display(plan, progress))
+                      display=progress.display(plan))
     elif sample is not None:
         sample.cancel(client)
 
@@ -213,7 +213,7 @@ def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
             queue.extend(blocks)
 
 
-def points_bar(plan: Plan, todo: list[int], enabled: bool):
+def points_bar(plan: Plan, todo: list[int], progress):
     """Progress in points (blocks are small and cost-balanced: sweeps.planning.plan), with tqdm's
     rate and ETA."""
-    return phases.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point", enabled)
+    return progress.bar(plan, "points", sum(len(plan.blocks[b]) for b in todo), "point")

@@ -12,7 +12,7 @@ from ..workers import task
 from ..workers.cluster import NOTICE_AFTER_S
 from ..workers.threads import ThreadClient
 from ..planning.plan import Plan, work_s
-from . import interrupt, phases
+from . import interrupt
 from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun_first,
                        show_reruns)
 from .sink import BlockSink
@@ -43,15 +43,15 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=
             finish_estimate(plan, pool, todo, sink, timings, sample, progress)
 
 
-def _warm_up_here(plan: Plan, sink: BlockSink, progress: bool) -> bool:
+def _warm_up_here(plan: Plan, sink: BlockSink, progress) -> bool:
     """Compile the kernel in this process, on a daemon thread (a Ctrl-C or a cancel during
     a first compilation, which cannot be interrupted, leaves it behind instead of waiting
-    for it), saying so after NOTICE_AFTER_S (phases.compiling); False if
+    for it), saying so after NOTICE_AFTER_S (the display's ``compiling``); False if
     ``sink.should_stop()`` turned true meanwhile."""
     thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-compile",
                               args=(plan.scene, plan.params, plan.numerics.settings))
     thread.start()
-    t0, compiling = time.monotonic(), phases.compiling(progress)
+    t0, compiling = time.monotonic(), progress.compiling()
     try:
         while thread.is_alive():
             thread.join(0.1)

@@ -60,13 +60,3 @@ def attached_lines(sweep_id: str, out=None):
             last[0] = text
 
     return show
-
-
-def attach(catalogue, sweep_id: str, *, progress: bool = True, poll_s: float = ATTACH_POLL_S,
-           out=None) -> dict:
-    """:func:`sweeps.run.lease_holder.wait_while_held`, showing :func:`attached_lines`
-    (the runner's call before its display was handed in; kept for callers of that time)."""
-    from .lease_holder import wait_while_held
-
-    return wait_while_held(catalogue, sweep_id, attached_lines(sweep_id, out) if progress
-                           else None, poll_s)

@@ -22,7 +22,6 @@ from store.flags import COMPUTED, INFERRED
 from engine import status as S
 
 from ..workers.cluster import dask_client
-from . import phases
 from .dispatch import run_blocks
 from .local import run_blocks_local
 from ..planning.plan import Plan, balanced_blocks
@@ -115,6 +114,6 @@ def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timi
         timings["compute_s"] = time.perf_counter() - t
         if simulate and needs_estimate(plan, sink.sweep, sink.cube):
             estimate_into(plan, c, sink.cube, sink.sweep, timings, started=early,
-                          display=phases.display(plan, progress))
+                          display=progress.display(plan))
         elif early is not None:
             early.cancel(c)

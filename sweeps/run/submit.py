@@ -18,7 +18,6 @@ the empty cube of a plan (sweeps.run.new_cube), the sink of finished blocks
 from __future__ import annotations
 
 import logging
-import sys
 import time
 from pathlib import Path
 
@@ -28,18 +27,16 @@ import store
 from engine import status as S
 from store.catalogue_db import FINAL
 
-from ..estimates import time_history as history
 from ..workers import task
 from ..workers.cluster import EarlyStart
-from . import phases
 from .new_cube import empty_cube
 from .dispatch import run_blocks
 from .local import run_blocks_local
-from .lease_holder import LEASE_LOST, Lease
+from .lease_holder import LEASE_LOST, Lease, wait_while_held
 from ..workers.matching import matched
 from .outcome import SubmitResult, abort, attached_result, final_result
 from ..planning.plan import Plan, work_s
-from .progress import attach
+from .quiet import display_of
 from ..estimates.error_reruns import (ESTIMATE_FILE, SampleRuns, attach_saved_estimate,
                                       needs_estimate)
 from .sink import BlockSink
@@ -66,7 +63,7 @@ def blocks_to_run(plan: Plan, cube) -> list[int]:
 
 
 def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
-           workers: int = 2, progress: bool = True, max_blocks: int | None = None,
+           workers: int = 2, progress=False, max_blocks: int | None = None,
            client=None, owner: str | None = None, stop=None,
            dashboard: str | None = None) -> SubmitResult:
     """Run every block of ``plan`` not yet finished OK; publish the cube.
@@ -81,8 +78,10 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     ``workers`` a :class:`sweeps.workers.batch.BatchWorkers` for batch jobs);
     ``owner`` the lease owner tag (default this process's ``host:pid``); ``stop`` a
     ``threading.Event`` that, once set, ends the run after its in-flight blocks and
-    re-queues the sweep (serve).
+    re-queues the sweep (serve). ``progress`` is the display the run shows
+    (sweeps.run.quiet; ``sweeps.run.phases.shown(True)`` for bars on stderr), False for none.
     """
+    progress = display_of(progress)
     t0 = time.perf_counter()
     store.layout.check_store(store_root, write=True)   # read-only, a file: one line, now
     sweep = store.SweepDir(store_root, plan.sweep_id)
@@ -125,7 +124,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
     early = EarlyStart(workers, dashboard, (task.warm_up, plan.scene, plan.params,
                                             plan.numerics.settings)) \
         if local and not here and (todo or needs_estimate(plan, sweep, cube)) else None
-    shown = phases.starting(plan, workers, progress)   # while it starts, drawn by client()
+    shown = progress.starting(plan, workers)   # while it starts, drawn by client()
     if early is not None:
         shown()
     try:
@@ -152,7 +151,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                 # drawn from the sweep id): no tail of re-runs after the last block
                 extra["sample"] = SampleRuns(plan)
             if early is not None:   # its workers are warm: the kernel compiled there
-                compiling = phases.compiling(progress)
+                compiling = progress.compiling()
                 client = early.client(sink.should_stop, compiling, starting=shown)
                 shown.close()
                 compiling.close()
@@ -166,7 +165,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
                 timings["cluster_s"] = waited
         shown.close()
         if sink.stopped != LEASE_LOST:   # else the new holder publishes
-            phases.say(plan, "publishing the cube", progress)
+            progress.say(plan, "publishing the cube")
             t = time.perf_counter()
             store.publish(cube, sweep.cube)
             timings["publish_s"] = time.perf_counter() - t
@@ -177,9 +176,6 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
             early.close()
         raise
     try:
-        if "compute_s" in timings and max_blocks is None and sink.stopped is None:
-            history.record_actual(Path(store_root), plan.sweep_id, plan.numerics.label,
-                                  timings["compute_s"])
         # the final state goes to the catalogue (the result is reported) before the
         # cluster stops: nobody waits for the stop to learn the sweep is done
         result = final_result(plan, sweep, catalogue, cube, blocks_run=sink.blocks_run,
@@ -190,7 +186,7 @@ def submit(plan: Plan, store_root: str | Path, *, scheduler: str | None = None,
             early.close()
         raise
     if early is not None:   # the result is reported first (the process waits at its exit)
-        phases.say(plan, "stopping the local cluster", progress)
+        progress.say(plan, "stopping the local cluster")
         early.close_later()
     log.debug("sweep %s timings: %s", plan.sweep_id,
               ", ".join(f"{k} {v:.2f} s" for k, v in timings.items()) or "-")
@@ -255,10 +251,9 @@ def _take_lease(plan: Plan, catalogue, owner, stop, progress):
         lease, row = Lease.take(catalogue, plan.sweep_id, owner, stop)
         if lease is not None:
             return lease, None
-        row = attach(catalogue, plan.sweep_id, progress=progress)
+        row = wait_while_held(catalogue, plan.sweep_id, progress.attached(plan.sweep_id))
         if row["state"] in FINAL:
             return None, row
         # queued again (a serve stopped) or stalled (the holder died): take it over
-        if progress:
-            print(f"sweep {plan.sweep_id}: {row['owner'] or 'its runner'} stopped "
-                  f"({catalogue.live_state(row)}); taking it over", file=sys.stderr, flush=True)
+        progress.note(f"sweep {plan.sweep_id}: {row['owner'] or 'its runner'} stopped "
+                      f"({catalogue.live_state(row)}); taking it over")

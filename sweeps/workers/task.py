@@ -6,9 +6,16 @@ files (sweeps.run.submit). :func:`warm_up` compiles the
 block kernel once per worker. With ``$DITHERLAB_BLOCK_LOG`` set every computed block is
 noted in that file (:func:`block_key`), which is how the tests count block computations
 across processes.
+
+The tests hold blocks back with hooks of their own (gates), installed from outside: a
+module named :data:`HOOKS_MODULE` on ``sys.path`` (tests/hooks/), looked up once per
+process. Its source is not part of this code's (sweeps.version: off the computing path);
+it is told the kind of computation alone and nothing it returns is used.
 """
 from __future__ import annotations
 
+import functools
+import importlib.util
 import logging
 import os
 import time
@@ -20,23 +27,22 @@ from engine import params as P
 from engine import status as S
 from store.record import BlockRecord
 
-from .block_gate import GATE_ENV, pass_gate
-
 log = logging.getLogger("ditherlab")
 
 BLOCK_LOG_ENV = "DITHERLAB_BLOCK_LOG"   # diagnostics: a file every computed block is noted in
+HOOKS_MODULE = "ditherlab_test_hooks"   # the tests' hooks (module docstring), where importable
 
 
 def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
                   index: np.ndarray | None = None, sizes=None,
-                  gate: str = GATE_ENV) -> BlockRecord:
+                  kind: str = "block") -> BlockRecord:
     """Integrate one block; never raises (a crash of the engine marks the block FAILED).
     ``index``: the points' flat cube indices, carried into the record (default: their
     positions in ``points``); ``sizes``: the points of each of the plan's blocks that
     ``points`` holds one after another (a dask task may compute several:
-    sweeps.planning.plan.blocks_per_task; default one block), each passing the test gate
-    (``gate``: the variable naming it, sweeps.workers.block_gate) and noted in the block
-    log once. The record's ``fingerprint`` is the results fingerprint of
+    sweeps.planning.plan.blocks_per_task; default one block), each told to the tests'
+    hook (``kind``: ``"block"``, or ``"rerun"`` for the error estimate's re-runs; module
+    docstring) and noted in the block log once. The record's ``fingerprint`` is the results fingerprint of
     the process that computed it (the submitter journals a block only under its own:
     sweeps.run.sink).
 
@@ -50,8 +56,8 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
         warm_up(scene, p, settings)
     starts = np.cumsum([0, *(sizes or [len(points)])])
     for a, b in zip(starts[:-1], starts[1:]):   # per block
-        if os.environ.get(gate):   # tests hold blocks back (sweeps.workers.block_gate)
-            pass_gate(os.environ[gate])
+        if (hook := _test_hook()) is not None:   # tests hold blocks back (module docstring)
+            hook(kind)
         if os.environ.get(BLOCK_LOG_ENV):
             _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points[a:b], settings))
     index = np.arange(len(points)) if index is None else index
@@ -63,6 +69,15 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
                                   S.FAILED, fingerprint=_fingerprint())
     return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs,
                        fingerprint=_fingerprint())
+
+
+@functools.cache
+def _test_hook():
+    """The tests' ``before_block(kind)`` (:data:`HOOKS_MODULE`), or None where no test
+    put it on ``sys.path`` (every run of users)."""
+    if importlib.util.find_spec(HOOKS_MODULE) is None:
+        return None
+    return importlib.import_module(HOOKS_MODULE).before_block
 
 
 def output_shapes(outputs) -> dict[str, tuple]:

@@ -6,7 +6,7 @@ points failed) is told apart from ``failed`` (the run crashed).
 
 Block computations are counted with ``$DITHERLAB_BLOCK_LOG`` (sweeps.workers.task.compute_block
 appends one line per computed block, in whichever process computes it) and held back with
-``$DITHERLAB_BLOCK_GATE`` (sweeps.workers.block_gate; the ``gate`` fixture): a test stops a
+``$DITHERLAB_BLOCK_GATE`` (tests/hooks; the ``gate`` fixture): a test stops a
 sweep, or starts a second submitter, while blocks are certainly still to run, and lets them
 go after it has seen the stop or the attach happen (no timing luck)."""
 import collections

@@ -26,7 +26,7 @@ import store
 import sweeps
 from sweeps.version import results_fingerprint
 
-from ..helpers import wait_for
+from ..helpers import gated, wait_for
 from . import slurm
 
 # a first run compiles the kernels in the local run and in the jobs: 900 s was too short
@@ -125,7 +125,7 @@ def test_a_worker_job_killed_mid_sweep_costs_only_its_blocks(slurm_env, local_cu
     gate.mkdir()
     for i in range(2):   # two blocks may pass; the rest wait at the gate
         (gate / f"ticket{i}").touch()
-    env = {**slurm_env, "DITHERLAB_BLOCK_GATE": str(gate)}
+    env = gated(dict(slurm_env), gate)
     proc = _submit(tmp_path, env)
     journal = store.Journal(store.SweepDir(tmp_path / "store",
                                            sweeps.load_spec(SPEC).sweep_id).journal)
@@ -151,7 +151,7 @@ def test_idle_jobs_end_as_the_sweep_ends(slurm_env, local_cube, tmp_path):
     gate.mkdir()
     for i in range(len(SPEC["grid"]["W"]) - 1):
         (gate / f"ticket{i}").touch()
-    proc = _submit(tmp_path, {**slurm_env, "DITHERLAB_BLOCK_GATE": str(gate)})
+    proc = _submit(tmp_path, gated(dict(slurm_env), gate))
     try:
         most = [0]   # the most jobs seen at once
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from ..helpers import AVERAGED_SPEC, SIMULATE_SPEC, BlockGate, as_a_terminal_job  # noqa: F401
+from ..helpers import (AVERAGED_SPEC, SIMULATE_SPEC, BlockGate, as_a_terminal_job,  # noqa: F401
+                       gated)
 
 
 @pytest.fixture
@@ -30,9 +31,7 @@ def env(tmp_path):
 def gate(tmp_path, env):
     """A shut :class:`BlockGate` in ``env`` (the test's ``env`` fixture): the processes
     started with ``env`` hold every block until the test lets it through."""
-    from sweeps.workers.block_gate import GATE_ENV
-
     held = BlockGate(tmp_path / "block-gate")
-    env[GATE_ENV] = str(held.path)
+    gated(env, held.path)
     yield held
     held.open()

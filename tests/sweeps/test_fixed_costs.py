@@ -24,12 +24,11 @@ from sweeps.run import submit as submit_module
 from sweeps.run.submit import small, submit
 from sweeps.spec import load_spec, parse_spec
 from sweeps.workers import task
-from sweeps.workers.block_gate import RERUN_GATE_ENV
 from sweeps.workers.cluster import wait_for_stops
 from sweeps.workers.task import block_key
 from sweeps.workers.threads import ThreadClient
 
-from ..helpers import BIN, ditherlab, wait_for
+from ..helpers import BIN, RERUN_GATE_ENV, ditherlab, gated, wait_for
 from .conftest import SIMULATE_SPEC, BlockGate
 
 # 16 points, 4 omegas: blocks of one omega each cost alike, and the re-runs (one level
@@ -73,7 +72,7 @@ def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
     started = []
     lock = threading.Lock()
 
-    def record(scene, points, p, settings, index=None, sizes=None, gate=None):
+    def record(scene, points, p, settings, index=None, sizes=None, kind=None):
         with lock:
             started.append(("rerun" if settings == sample.finer.settings else "block",
                             tuple(np.asarray(index).tolist())))
@@ -214,7 +213,7 @@ def test_a_kill_while_reruns_run_among_the_blocks_leaves_a_resumable_sweep(
     # priced above every block (one level finer): the re-runs start first
     assert max(sample.costs) > max(work_s(plan, b) for b in plan.blocks)
     held = BlockGate(tmp_path / "rerun-gate")
-    env[RERUN_GATE_ENV] = str(held.path)
+    gated(env, held.path, RERUN_GATE_ENV)
     crashed, clean = tmp_path / "crashed", tmp_path / "clean"
     journal = crashed / spec.sweep_id / "journal"
     log = Path(env["DITHERLAB_BLOCK_LOG"])

@@ -15,7 +15,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from ..helpers import BIN, ditherlab, wait_for
+from ..helpers import BIN, ditherlab, gated, wait_for
 from .conftest import SIMULATE_SPEC
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
@@ -53,7 +53,7 @@ def test_every_socket_binds_loopback(command, tmp_path):
     gate.mkdir()
     spec = tmp_path / "sim.toml"
     spec.write_text(CLUSTER_SPEC)
-    env = {**os.environ, "DITHERLAB_BLOCK_GATE": str(gate)}
+    env = gated(dict(os.environ), gate)
     store = str(tmp_path / "store")
     if command == "serve":
         subprocess.run([BIN, "submit", str(spec), "--store", store, "--detach", "-q"],

@@ -1,4 +1,11 @@
-"""A gate the tests hold blocks back with (diagnostics, like ``$DITHERLAB_BLOCK_LOG``).
+"""The tests' hooks inside a worker's task: the gates that hold blocks back. Not a module of
+ditherlab: ``sweeps.workers.task`` looks this module up by name once per process
+(``sweeps.workers.task.HOOKS_MODULE``) and finds it only where a test put this folder on
+``PYTHONPATH`` (``tests.helpers.gated``): in the processes the test starts and their dask
+workers (local processes or batch jobs inherit the environment). The task calls
+:func:`before_block` with the kind of computation alone and uses nothing it returns, so no
+hook can change a number; this source is off the computing path (sweeps.version), and the
+gates can change without re-iding a sweep.
 
 With ``$DITHERLAB_BLOCK_GATE`` naming a FIFO (``os.mkfifo``), every block computation
 (:func:`sweeps.workers.task.compute_block`, in whichever process runs it) takes one byte from it
@@ -24,6 +31,15 @@ GATE_ENV = "DITHERLAB_BLOCK_GATE"
 # three blocks through gets three blocks), and a gate of their own, the same kinds of file,
 # when $DITHERLAB_RERUN_GATE names one.
 RERUN_GATE_ENV = "DITHERLAB_RERUN_GATE"
+
+
+def before_block(kind: str) -> None:
+    """Called by the task before each computation: ``kind`` ``"block"`` (a block of the
+    plan) passes ``$DITHERLAB_BLOCK_GATE``, ``"rerun"`` (an error-estimate re-run)
+    ``$DITHERLAB_RERUN_GATE``, each when set."""
+    path = os.environ.get(RERUN_GATE_ENV if kind == "rerun" else GATE_ENV)
+    if path:
+        pass_gate(path)
 
 
 def pass_gate(path: str) -> None:
