@@ -67,9 +67,19 @@ t0 = time.perf_counter()
 import numpy as np
 from sweeps.spec.load import load_spec
 from sweeps.planning.plan import make_plan
-from sweeps.run.phases import shown
 from sweeps.run.submit import submit
 import store
+
+try:   # a display handed in, where the runner of the checkout takes one (issue 38)
+    from sweeps.run.phases import shown as display
+    progress = display(True)
+except ImportError:
+    progress = True
+try:   # where the blocks run: a Compute, where the checkout has one (issue 38)
+    from sweeps.workers.compute import Compute
+    where = {"compute": Compute(int(sys.argv[3]))}
+except ImportError:
+    where = {"workers": int(sys.argv[3])}
 
 
 class Stamped:   # the progress display's redraws, timed (tqdm writes to sys.stderr)
@@ -90,7 +100,7 @@ plan = make_plan(load_spec(spec))
 shown = Stamped()
 sys.stderr = shown
 t1 = time.perf_counter()
-res = submit(plan, root, workers=workers, progress=shown(True))
+res = submit(plan, root, progress=progress, **where)
 t2 = time.perf_counter()
 sys.stderr = sys.__stderr__
 cube = store.read_cube(res.cube_path)

@@ -22,6 +22,7 @@ import time
 from sweeps.estimates.error_reruns import SampleRuns
 from sweeps.planning.plan import make_plan
 from sweeps.run.submit import submit
+from sweeps.workers.compute import Compute
 from sweeps.spec import parse_spec
 from sweeps.workers.task import compute_block, warm_up
 
@@ -58,7 +59,7 @@ def work(timings: dict) -> float:
 
 def on_dask(plan, workers: int) -> dict:
     with tempfile.TemporaryDirectory() as store:
-        res = submit(plan, store, workers=workers, progress=False)
+        res = submit(plan, store, Compute(workers), progress=False)
     assert res.state == "done", res
     return res.timings
 

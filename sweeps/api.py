@@ -43,13 +43,15 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
     from .planning.plan import make_plan
     from .run.phases import shown
     from .run.submit import submit
+    from .workers.compute import Compute
 
     _refuse_in_spawned_import()
     if not isinstance(spec, Spec):
         spec = load_spec(spec, max_points=max_points)
     plan, root = make_plan(spec), store_root(store)
-    res = submit(plan, root, scheduler=scheduler, workers=workers, progress=shown(progress),
-                 client=client, dashboard=dashboard)
+    compute = Compute.chosen(workers=workers, scheduler=scheduler, client=client,
+                             dashboard=dashboard)
+    res = submit(plan, root, compute, progress=shown(progress))
     record_run(root, plan, res)
     return res
 

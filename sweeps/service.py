@@ -117,106 +117,138 @@ class _Signals:
         return False
 
 
-def serve(store_root, *, scheduler: str | None = None, workers: int = 2,
-          poll_s: float = SERVE_POLL_S, idle_exit_s: float | None = None,
-          progress: bool = False, say=None, dashboard: str | None = None) -> int:
-    """Run queued sweeps of the store, oldest first, one at a time, until SIGTERM/SIGINT
-    (or, with ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
-    from .workers.cluster import dask_client
-    from .planning.plan import make_plan
-    from .estimates.time_history import record_run
-    from .run.phases import shown
-    from .run.submit import submit
-    from .spec.load import SpecError, load_spec
+def serve(store_root, compute=None, *, poll_s: float = SERVE_POLL_S,
+          idle_exit_s: float | None = None, progress: bool = False, say=None) -> int:
+    """Run queued sweeps of the store, oldest first, one at a time, on ``compute`` (a
+    :class:`sweeps.workers.compute.Compute`, default a local cluster of 2 workers, started
+    for the first simulated sweep and kept between sweeps) until SIGTERM/SIGINT (or, with
+    ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
+    from .workers.compute import Compute
 
-    say = say or (lambda text: print(text, file=sys.stderr, flush=True))
-    root = store.layout.check_store(store_root, write=True)
-    catalogue = Catalogue(root)
-    me = owner_tag()
-    stop = threading.Event()
-    where = scheduler or (f"local cluster of {workers} workers" if isinstance(workers, int)
-                          else f"up to {workers.jobs} {workers.kind} batch jobs")
-    client_cm = client = None
-    idle_since = time.monotonic()
-    current = {"sweep_id": ""}
-    beating = threading.Event()
+    server = _Server(store_root, compute or Compute(), progress,
+                     say or (lambda text: print(text, file=sys.stderr, flush=True)))
+    server.start()
+    try:
+        with _Signals(server.stop, server.say):
+            idle_since = time.monotonic()
+            while not server.stop.is_set():
+                if server.next():
+                    idle_since = time.monotonic()
+                elif idle_exit_s is not None and time.monotonic() - idle_since > idle_exit_s:
+                    break
+                else:
+                    server.stop.wait(poll_s)
+    finally:
+        server.shut_down()
+    server.say(f"serve {server.me}: stopped")
+    return 0
 
-    def beat_loop() -> None:   # serve's own heartbeat, also while a sweep runs
-        while not beating.wait(HEARTBEAT_S):
+
+class _Server:
+    """serve's steps: :meth:`start` (heartbeat, banner), :meth:`next` (claim the oldest
+    queued sweep, :meth:`plan_of` it, :meth:`run` it on the kept compute), :meth:`shut_down`
+    (the claimed sweep back to the queue, the cluster closed)."""
+
+    def __init__(self, store_root, compute, progress: bool, say):
+        self.root = store.layout.check_store(store_root, write=True)
+        self.catalogue, self.me = Catalogue(self.root), owner_tag()
+        self.compute, self.progress, self.say = compute, progress, say
+        self.stop, self.beating = threading.Event(), threading.Event()
+        self.current = ""   # the sweep claimed, until its run ends
+
+    def start(self) -> None:
+        """serve's own heartbeat, on a thread (also while a sweep runs), and its banner."""
+        self.beat()
+        threading.Thread(target=self._beat_loop, daemon=True, name="ditherlab-serve-beat").start()
+        self.say(f"serve {self.me}: store {self.root}, {self.compute.where}; waiting for "
+                 "queued sweeps (SIGTERM or Ctrl-C stops)")
+
+    def beat(self) -> None:
+        self.catalogue.server_beat(self.me, sweep_id=self.current, cluster=self.compute.where)
+
+    def _beat_loop(self) -> None:
+        while not self.beating.wait(HEARTBEAT_S):
             try:
-                catalogue.server_beat(me, sweep_id=current["sweep_id"], cluster=where)
+                self.beat()
             except Exception as err:  # noqa: BLE001 -- a busy catalogue: next beat
                 log.warning("serve heartbeat failed: %s", err)
 
-    catalogue.server_beat(me, cluster=where)
-    threading.Thread(target=beat_loop, daemon=True, name="ditherlab-serve-beat").start()
-    say(f"serve {me}: store {root}, {where}; waiting for queued sweeps (SIGTERM or Ctrl-C "
-        "stops)")
-    try:
-        with _Signals(stop, say):
-            while not stop.is_set():
-                current["sweep_id"] = ""
-                row = catalogue.claim_next(me)
-                if row is None:
-                    if idle_exit_s is not None and time.monotonic() - idle_since > idle_exit_s:
-                        break
-                    stop.wait(poll_s)
-                    continue
-                sweep_id = current["sweep_id"] = row["sweep_id"]
-                catalogue.server_beat(me, sweep_id=sweep_id, cluster=where)
-                try:
-                    plan = make_plan(load_spec(json.loads(row["spec_json"]),
-                                               max_points=max(row["n_points"], 1)))
-                except (SpecError, ValueError) as err:
-                    catalogue.finish(sweep_id, "failed", owner=me,
-                                     message=f"cannot run the queued spec: {err}")
-                    say(f"serve: {sweep_id} failed: {err}")
-                    continue
-                if plan.sweep_id != sweep_id:
-                    # the engine (or ditherlab) changed since it was queued: its results
-                    # belong under the id the installed engine gives the spec
-                    enqueue(plan, root)
-                    catalogue.finish(sweep_id, "cancelled", owner=me, message=(
-                        f"the engine changed after it was queued; re-queued as {plan.sweep_id}"))
-                    say(f"serve: {sweep_id}: the engine changed since it was queued; "
-                        f"re-queued as {plan.sweep_id}")
-                    continue
-                say(f"serve: running {sweep_id} '{plan.spec.name}': {plan.n_points} points in "
-                    f"{len(plan.blocks)} blocks")
-                if client is None and plan.path == "simulate":
-                    client_cm = dask_client(scheduler, workers, dashboard)
-                    client = client_cm.__enter__()
-                try:
-                    res = submit(plan, root, scheduler=scheduler, workers=workers,
-                                 progress=shown(progress), client=client, owner=me, stop=stop)
-                except Exception as err:  # noqa: BLE001 -- recorded as failed; serve goes on
-                    text = f"{type(err).__name__}: {err}".splitlines()[0][:500]
-                    say(f"serve: {sweep_id} failed: {text}")
-                    # raised before the run took its lease (store checks): still ours
-                    catalogue.finish(sweep_id, "failed", owner=me,
-                                     message=f"the run could not start: {text}")
-                    if client_cm is not None:   # the cluster may be the culprit: a fresh one
-                        client_cm.__exit__(None, None, None)
-                        client_cm = client = None
-                else:
-                    record_run(root, plan, res)
-                    say(f"serve: {sweep_id}: {res.state}, ran {res.blocks_run} blocks; "
-                        f"{res.n_ok}/{res.n_points} ok, {res.n_failed} failed; "
-                        f"{res.wall_s:.1f} s" + (f" ({res.message})" if res.message else ""))
-                finally:   # batch jobs end between sweeps: no allocation held while waiting
-                    if getattr(client, "scaler", None) is not None:
-                        client.scaler.release()
-                idle_since = time.monotonic()
-                catalogue.server_beat(me, cluster=where)
-    finally:
-        beating.set()
-        if current["sweep_id"]:   # interrupted between claim and run: back to the queue
-            catalogue.requeue(current["sweep_id"], me, "re-queued: serve was interrupted")
-        if client_cm is not None:
-            client_cm.__exit__(None, None, None)
-        catalogue.server_gone(me)
-    say(f"serve {me}: stopped")
-    return 0
+    def next(self) -> bool:
+        """Claim and run the oldest queued sweep; False when none is queued."""
+        row = self.catalogue.claim_next(self.me)
+        if row is None:
+            return False
+        self.current = row["sweep_id"]
+        self.beat()
+        plan = self.plan_of(row)
+        if plan is not None:
+            self.run(plan)
+        self.current = ""
+        self.beat()
+        return True
+
+    def plan_of(self, row: dict):
+        """The plan of a claimed row; None (the row settled) when its spec is refused now,
+        or when the installed engine gives it another id (re-queued under that id)."""
+        from .planning.plan import make_plan
+        from .spec.load import SpecError, load_spec
+
+        sweep_id = row["sweep_id"]
+        try:
+            plan = make_plan(load_spec(json.loads(row["spec_json"]),
+                                       max_points=max(row["n_points"], 1)))
+        except (SpecError, ValueError) as err:
+            self.catalogue.finish(sweep_id, "failed", owner=self.me,
+                                  message=f"cannot run the queued spec: {err}")
+            self.say(f"serve: {sweep_id} failed: {err}")
+            return None
+        if plan.sweep_id != sweep_id:
+            # the engine (or ditherlab) changed since it was queued: its results belong
+            # under the id the installed engine gives the spec
+            enqueue(plan, self.root)
+            self.catalogue.finish(sweep_id, "cancelled", owner=self.me, message=(
+                f"the engine changed after it was queued; re-queued as {plan.sweep_id}"))
+            self.say(f"serve: {sweep_id}: the engine changed since it was queued; "
+                     f"re-queued as {plan.sweep_id}")
+            return None
+        return plan
+
+    def run(self, plan) -> None:
+        """Run ``plan`` on the compute, opened for the first simulated sweep and kept (a
+        failed run closes it: the cluster may be the culprit); batch jobs end after it."""
+        from .estimates.time_history import record_run
+        from .run.phases import shown
+        from .run.submit import submit
+
+        sweep_id = plan.sweep_id
+        self.say(f"serve: running {sweep_id} '{plan.spec.name}': {plan.n_points} points in "
+                 f"{len(plan.blocks)} blocks")
+        try:
+            if plan.path == "simulate":
+                self.compute.open()
+            res = submit(plan, self.root, self.compute, progress=shown(self.progress),
+                         owner=self.me, stop=self.stop)
+        except Exception as err:  # noqa: BLE001 -- recorded as failed; serve goes on
+            text = f"{type(err).__name__}: {err}".splitlines()[0][:500]
+            self.say(f"serve: {sweep_id} failed: {text}")
+            # raised before the run took its lease (store checks): still ours
+            self.catalogue.finish(sweep_id, "failed", owner=self.me,
+                                  message=f"the run could not start: {text}")
+            self.compute.close()   # a fresh cluster for the next sweep
+        else:
+            record_run(self.root, plan, res)
+            self.say(f"serve: {sweep_id}: {res.state}, ran {res.blocks_run} blocks; "
+                     f"{res.n_ok}/{res.n_points} ok, {res.n_failed} failed; "
+                     f"{res.wall_s:.1f} s" + (f" ({res.message})" if res.message else ""))
+        finally:   # batch jobs end between sweeps: no allocation held while waiting
+            self.compute.release()
+
+    def shut_down(self) -> None:
+        self.beating.set()
+        if self.current:   # interrupted between claim and run: back to the queue
+            self.catalogue.requeue(self.current, self.me, "re-queued: serve was interrupted")
+        self.compute.close()
+        self.catalogue.server_gone(self.me)
 
 
 def queue_hint(catalogue: Catalogue, rows: list[dict]) -> str | None:

@@ -35,8 +35,7 @@ def cmd_submit(args) -> int:
         return _submit_detached(plan, root)
     try:
         with remembered():   # a Ctrl-C is never swallowed by a dask callback
-            res = submit(plan, root, scheduler=args.scheduler, workers=_workers(args),
-                         progress=shown(not args.quiet), dashboard=args.dashboard)
+            res = submit(plan, root, _compute(args), progress=shown(not args.quiet))
     except KeyboardInterrupt:
         raise Interrupted(f"interrupted; {_kept(plan, root)}; "
                           "submit the spec again to resume") from None
@@ -90,8 +89,7 @@ def _submit_detached(plan, root: Path) -> int:
 def cmd_serve(args) -> int:
     from ..service import serve
 
-    return serve(store_root(args.store), scheduler=args.scheduler, workers=_workers(args),
-                 progress=False, dashboard=args.dashboard)
+    return serve(store_root(args.store), _compute(args), progress=False)
 
 
 def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
@@ -106,13 +104,13 @@ def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
                                "job start-up (an idle queue; a busy one adds its wait)")
 
 
-def _workers(args):
-    """``--workers N`` local processes, or ``--cluster KIND --jobs N`` batch jobs."""
-    if not args.cluster:
-        return args.workers
-    from ..workers.batch import BatchWorkers
+def _compute(args):
+    """Where the blocks are computed: ``--scheduler ADDRESS``, ``--cluster KIND --jobs N``
+    batch jobs, or ``--workers N`` local processes; ``--dashboard``."""
+    from ..workers.compute import Compute
 
-    return BatchWorkers(args.cluster, args.jobs)
+    return Compute.chosen(workers=args.workers, cluster=args.cluster, jobs=args.jobs,
+                          scheduler=args.scheduler, dashboard=args.dashboard)
 
 
 def cmd_cancel(args) -> int:

@@ -9,12 +9,10 @@ from __future__ import annotations
 
 import threading
 import time
-from contextlib import nullcontext
 
 import numpy as np
 
 from ..workers import task
-from ..workers.cluster import dask_client
 from ..workers.matching import matched
 from ..planning.plan import Plan, blocks_per_task, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
@@ -25,44 +23,40 @@ REFRESH_S = 2.0    # how often the dispatch looks at the workers again
 TICK_S = 0.02      # how often it looks for finished blocks
 
 
-def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler, workers,
-               progress, timings, client=None, dashboard=None, filler=None,
-               warm_up: bool = True, sample=None) -> None:
-    """Compute ``todo`` on the cluster. ``sample`` (sweeps.estimates.error_reruns.SampleRuns):
-    the error estimate's re-runs, dispatched among the blocks, longest expected first, and
-    gathered once the blocks are done. ``filler`` (a refined sweep's error sample) gives
-    tasks to run where a worker would otherwise idle: once no block is left to submit,
-    while fewer tasks than threads are running. ``warm_up=False`` skips compiling the
-    kernel on the workers (done by an earlier call on the same client: ``client.run``
-    would wait for the filler tasks still running)."""
+def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progress,
+               filler=None, warm_up: bool = True, sample=None) -> None:
+    """Compute ``todo`` on the open cluster of ``compute`` (a
+    :class:`sweeps.workers.compute.Compute`; batch jobs scaled to the blocks). ``sample``
+    (sweeps.estimates.error_reruns.SampleRuns): the error estimate's re-runs, dispatched
+    among the blocks, longest expected first, and gathered once the blocks are done.
+    ``filler`` (a refined sweep's error sample) gives tasks to run where a worker would
+    otherwise idle: once no block is left to submit, while fewer tasks than threads are
+    running. ``warm_up=False`` skips compiling the kernel on the workers (done by an
+    earlier call on the same client, or by the early start: ``client.run`` would wait for
+    the filler tasks still running). Times go to ``sink.timings``."""
     bar = points_bar(plan, todo, progress)
+    client = matched(compute.client, [ref for ref, _ in plan.scene.digests])
+    if todo:   # batch jobs for these blocks: serve waits without any, a refined level may end some
+        compute.start(len(todo))
     t = time.perf_counter()
-    with (nullcontext(client) if client is not None
-          else dask_client(scheduler, workers, dashboard)) as cluster_client:
-        client = matched(cluster_client, [ref for ref, _ in plan.scene.digests])
-        if getattr(client, "scaler", None) is not None and todo and not isinstance(workers, int):
-            # batch jobs for these blocks: serve waits without any, a refined level may end some
-            client.scaler.start(workers.for_blocks(len(todo)).jobs)
-        timings["cluster_s"] = time.perf_counter() - t
-        t = time.perf_counter()
-        warm = _warm_up_workers(client, plan, sink) if warm_up else not sink.should_stop()
-        timings["warm_up_s"] = time.perf_counter() - t
-        t = time.perf_counter()
-        if warm:
-            sink.started()
-            _dispatch(client, plan, todo, sink, bar, filler, sample)
-        timings["compute_s"] = time.perf_counter() - t
-        bar.close()   # the points are done: say so before the next phase
-        finish_estimate(plan, client, todo, sink, timings, sample, progress)
+    warm = _warm_up_workers(client, plan, sink) if warm_up else not sink.should_stop()
+    if warm_up:
+        sink.timings["warm_up_s"] = time.perf_counter() - t
+    t = time.perf_counter()
+    if warm:
+        sink.started()
+        _dispatch(client, plan, todo, sink, bar, filler, sample, compute)
+    sink.timings["compute_s"] = time.perf_counter() - t
+    bar.close()   # the points are done: say so before the next phase
+    finish_estimate(plan, client, todo, sink, sample, progress)
 
 
-def finish_estimate(plan: Plan, client, todo, sink: BlockSink, timings, sample,
-                    progress) -> None:
+def finish_estimate(plan: Plan, client, todo, sink: BlockSink, sample, progress) -> None:
     """The error estimate once the points are done (its re-runs ``sample``, if given,
     already dispatched among the blocks); a stopped run's re-runs are cancelled."""
     if sink.stopped is None and (needs_estimate(plan, sink.sweep, sink.cube) or
                                  (todo and plan.path == "simulate" and complete(sink.cube))):
-        estimate_into(plan, client, sink.cube, sink.sweep, timings, started=sample,
+        estimate_into(plan, client, sink.cube, sink.sweep, sink.timings, started=sample,
                       display=progress.display(plan))
     elif sample is not None:
         sample.cancel(client)
@@ -92,7 +86,7 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
 
 
 def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
-              filler=None, sample=None) -> None:
+              filler=None, sample=None, compute=None) -> None:
     """Keep one task per matching worker thread (plus one) in flight, the next submitted
     as one finishes; once ``sink.should_stop()``, submit no more and collect those in
     flight (a stop loses no finished work and waits for at most one task per worker). A
@@ -104,7 +98,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     Every REFRESH_S the workers are looked at again (``client`` is a
     :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
     workers have all gone is submitted again, and a batch cluster's idle jobs end once
-    fewer blocks are left than workers (``client.scaler``)."""
+    fewer blocks are left than workers (``compute.shrink``: the run's
+    :class:`sweeps.workers.compute.Compute`)."""
     from distributed import as_completed
 
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
@@ -152,8 +147,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             _resubmit_orphans(client, inflight, good, queue)
-            if getattr(client, "scaler", None) is not None:
-                client.scaler.tick(len(queue) + len(inflight))
+            if compute is not None:
+                compute.shrink(len(queue) + len(inflight))
         stopping = sink.should_stop()
         if not stopping:
             fill()

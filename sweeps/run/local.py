@@ -18,29 +18,29 @@ from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun
 from .sink import BlockSink
 
 
-def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, *, scheduler=None,
-                     workers=2, progress, timings, client=None, dashboard=None,
+def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progress,
                      sample=None, warm_up: bool = True) -> None:
-    """Compute ``todo`` on ``workers`` threads of this process: the analysis paths (they
-    cost microseconds per point), and a simulated sweep whose estimated work is below the
-    cost of starting a cluster (sweeps.run.submit.small). The same task, journal and
-    checks as on a cluster, the same longest-first order, the error sample's re-runs
-    (``sample``) among the blocks; the kernel is compiled once first (``warm_up``)."""
-    threads = workers if isinstance(workers, int) else 2
-    with ThreadClient(threads) as pool:
+    """Compute ``todo`` on threads of this process, as many as ``compute`` asks for
+    (:attr:`sweeps.workers.compute.Compute.threads`; it opens nothing): the analysis paths
+    (they cost microseconds per point), and a simulated sweep whose estimated work is
+    below the cost of starting a cluster (sweeps.run.submit.small). The same task, journal
+    and checks as on a cluster, the same longest-first order, the error sample's re-runs
+    (``sample``) among the blocks; the kernel is compiled once first (``warm_up``). Times
+    go to ``sink.timings``."""
+    with ThreadClient(compute.threads) as pool:
         if plan.path == "simulate" and warm_up:
             t = time.perf_counter()
             if not _warm_up_here(plan, sink, progress):
                 return
-            timings["warm_up_s"] = time.perf_counter() - t
+            sink.timings["warm_up_s"] = time.perf_counter() - t
         bar = points_bar(plan, todo, progress)   # its clock starts with the points
         t = time.perf_counter()
         sink.started()
         _dispatch_local(pool, plan, todo, sink, bar, sample)
-        timings["compute_s"] = time.perf_counter() - t
+        sink.timings["compute_s"] = time.perf_counter() - t
         bar.close()
         if plan.path == "simulate":
-            finish_estimate(plan, pool, todo, sink, timings, sample, progress)
+            finish_estimate(plan, pool, todo, sink, sample, progress)
 
 
 def _warm_up_here(plan: Plan, sink: BlockSink, progress) -> bool:

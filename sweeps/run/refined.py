@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import time
-from contextlib import nullcontext
 
 import numpy as np
 
@@ -21,9 +20,7 @@ import store
 from store.flags import COMPUTED, INFERRED
 from engine import status as S
 
-from ..workers.cluster import dask_client
 from .dispatch import run_blocks
-from .local import run_blocks_local
 from ..planning.plan import Plan, balanced_blocks
 from ..planning.refine import CLASS_OUTPUT, MARGIN_OUTPUT, Refinement
 from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
@@ -85,35 +82,32 @@ def infer(plan: Plan, cube) -> None:
         asked, COMPUTED, INFERRED).reshape(plan.shape)
 
 
-def run(plan: Plan, todo: list[int], sink, *, scheduler, workers, progress, timings,
-        client=None, dashboard=None, warm_up: bool = True) -> None:
+def run(plan: Plan, todo: list[int], sink, compute, *, blocks, progress,
+        warm_up: bool = True) -> None:
     """Compute ``todo`` (the first unfinished level's blocks), then every further level,
-    infer the rest, and (simulate) estimate the error on computed points: its finer re-runs
-    run where a worker would idle at a level's tail (sweeps.run.dispatch ``filler``)."""
+    each with ``blocks`` (sweeps.run.dispatch.run_blocks on the open cluster of ``compute``,
+    or sweeps.run.local.run_blocks_local on threads), infer the rest, and (simulate)
+    estimate the error on computed points: its finer re-runs run where a worker would idle
+    at a level's tail (sweeps.run.dispatch ``filler``)."""
     simulate = plan.path == "simulate"
-    own = simulate and client is None
-    t = time.perf_counter()
-    with (dask_client(scheduler, workers, dashboard) if own else nullcontext(client)) as c:
-        timings["cluster_s"] = time.perf_counter() - t
-        blocks = run_blocks if simulate or scheduler else run_blocks_local
-        # the error sample's finer re-runs fill the workers idling at each level's tail
-        early = SampleRuns(plan) if simulate and todo and not \
-            (sink.sweep.root / ESTIMATE_FILE).exists() else None
-        extra = {"filler": early} if early is not None else {}
-        extra = extra if warm_up else {**extra, "warm_up": False}
-        t, level = time.perf_counter(), 0
-        while todo:
-            blocks(plan, todo, sink, scheduler=scheduler, workers=workers, progress=progress,
-                   timings={}, client=c, **extra)
-            extra = {**extra, "warm_up": False} if simulate or scheduler else extra
-            if sink.stopped is not None:
-                if early is not None:
-                    early.cancel(c)
-                return
-            todo, level = _advance(plan, sink.cube), level + 1
-        timings["compute_s"] = time.perf_counter() - t
-        if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-            estimate_into(plan, c, sink.cube, sink.sweep, timings, started=early,
-                          display=progress.display(plan))
-        elif early is not None:
-            early.cancel(c)
+    pool = compute.client if blocks is run_blocks else None   # (threads: the estimate's own)
+    # the error sample's finer re-runs fill the workers idling at each level's tail
+    early = SampleRuns(plan) if simulate and todo and not \
+        (sink.sweep.root / ESTIMATE_FILE).exists() else None
+    extra = {"filler": early} if early is not None else {}
+    extra = extra if warm_up else {**extra, "warm_up": False}
+    t, level = time.perf_counter(), 0
+    while todo:
+        blocks(plan, todo, sink, compute, progress=progress, **extra)
+        extra = {**extra, "warm_up": False} if blocks is run_blocks else extra
+        if sink.stopped is not None:
+            if early is not None:
+                early.cancel(pool)
+            return
+        todo, level = _advance(plan, sink.cube), level + 1
+    sink.timings["compute_s"] = time.perf_counter() - t
+    if simulate and needs_estimate(plan, sink.sweep, sink.cube):
+        estimate_into(plan, pool, sink.cube, sink.sweep, sink.timings, started=early,
+                      display=progress.display(plan))
+    elif early is not None:
+        early.cancel(pool)

@@ -40,6 +40,7 @@ class BlockSink:
         self.fingerprint = results_fingerprint()     # what every journaled block must carry
         self.foreign_blocks = 0                      # blocks refused for another engine
         self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
+        self.timings: dict[str, float] = {}          # phase -> seconds (SubmitResult.timings)
         self._report(force=True)
 
     def __call__(self, b: int, record: BlockRecord) -> None:

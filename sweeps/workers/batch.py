@@ -16,7 +16,8 @@ or ``DASK_JOBQUEUE__<KIND>__<KEY>`` in the environment. ditherlab sets only what
 
 The number of jobs follows the work: at most one per block left (:class:`BatchWorkers`),
 and jobs whose worker idles once fewer blocks are left than workers end
-(:class:`JobScaler`, called by the dispatch), so no allocation is held idle.
+(:class:`JobScaler`, driven by the run's sweeps.workers.compute.Compute: the dispatch
+shrinks it), so no allocation is held idle.
 """
 from __future__ import annotations
 
@@ -122,8 +123,9 @@ def jobqueue():
 
 @contextmanager
 def batch_client(workers: BatchWorkers, dashboard: str | None = None):
-    """A matched client (sweeps.workers.matching) on ``workers.jobs`` batch jobs, cancelled at the
-    end (also on failure)."""
+    """``(client, scaler)``: a matched client (sweeps.workers.matching) on ``workers.jobs``
+    batch jobs, cancelled at the end (also on failure), and the :class:`JobScaler` of its
+    jobs (sweeps.workers.compute.Compute scales them)."""
     from distributed import Client
 
     from .matching import matched
@@ -132,9 +134,7 @@ def batch_client(workers: BatchWorkers, dashboard: str | None = None):
     with cluster, Client(cluster, set_as_default=False) as client:
         cluster.scale(jobs=workers.jobs)
         log.debug("%d %s jobs submitted", workers.jobs, workers.kind)
-        out = matched(client)
-        out.scaler = JobScaler(cluster, client)
-        yield out
+        yield matched(client), JobScaler(cluster, client)
 
 
 class JobScaler:

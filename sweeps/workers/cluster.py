@@ -21,10 +21,11 @@ class ClusterStartError(RuntimeError):
 
 @contextmanager
 def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str | None = None):
-    """A client on an existing cluster (``scheduler`` address), on a LocalCluster of
-    ``workers`` single-threaded processes, or on batch jobs (``workers`` a
-    :class:`sweeps.workers.batch.BatchWorkers`). Its tasks reach only the workers that run this
-    engine (a :class:`sweeps.workers.matching.MatchedClient`).
+    """A client on an existing cluster (``scheduler`` address) or on a LocalCluster of
+    ``workers`` single-threaded processes (batch jobs: sweeps.workers.batch.batch_client; a
+    run's choice among them is its :class:`sweeps.workers.compute.Compute`). Its tasks
+    reach only the workers that run this engine (a
+    :class:`sweeps.workers.matching.MatchedClient`).
 
     ``dashboard`` is the address of the LocalCluster's dask dashboard (e.g. ``":8787"``,
     needs bokeh: ``pip install 'ditherlab[dashboard]'``); its link is logged when it
@@ -45,12 +46,6 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
             yield matched(client)
         finally:
             client.close()
-        return
-    if not isinstance(workers, int):   # sweeps.workers.batch.BatchWorkers: workers as batch jobs
-        from .batch import batch_client
-
-        with batch_client(workers, dashboard) as client:
-            yield client
         return
     # every socket on loopback (scheduler, its HTTP server, nannies, workers) unless the
     # user names the dashboard's address
@@ -73,20 +68,22 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
 
 
 class EarlyStart:
-    """A LocalCluster started, and the run's kernel compiled on its workers, in a thread
-    while the submitter still prepares its cube (rebuild, first publish): on a refined
-    Fig. 14 map that preparation takes about a second, cluster start and warm-up two.
+    """A cluster of our own started, and the run's kernel compiled on its workers, in a
+    thread while the submitter still reads the store and prepares its cube (rebuild, lease,
+    first publish): on a refined Fig. 14 map that preparation takes about a second, cluster
+    start and warm-up two (:meth:`sweeps.workers.compute.Compute.start_early`).
 
-    Made on the main thread once the sweep's lease is taken. SIGINT is ignored until the
-    workers are up and the submitter asks for the client, so they are born ignoring it (as
-    with :func:`dask_client`); a Ctrl-C in those one or two seconds is dropped. ``warm`` is
-    ``(fn, *args)``, run on every worker once they are up (sweeps.workers.task.warm_up)."""
+    Made on the main thread. SIGINT is ignored until the workers are up and the submitter
+    asks for the client, so they are born ignoring it (as with :func:`dask_client`); a
+    Ctrl-C in those one or two seconds is dropped. ``connect`` is the context manager that
+    makes the cluster (it yields a matched client), ``warm`` is ``(fn, *args)``, run on
+    every worker once they are up (sweeps.workers.task.warm_up)."""
 
-    def __init__(self, workers: int, dashboard: str | None, warm: tuple):
+    def __init__(self, connect, warm: tuple):
         # an earlier run's cluster still stopping (close_later) stops first: two local
         # clusters overlapping also undo each other's silenced dask logs
         wait_for_stops()
-        self._cm = dask_client(None, workers, dashboard)
+        self._cm = connect
         self._client = None
         self._error: BaseException | None = None
         self._up = threading.Event()          # the cluster is started, or failed to

@@ -118,10 +118,7 @@ class WorkerCheck:
 
 class MatchedClient:
     """A dask client whose ``submit``, ``map`` and ``run`` reach only the matching workers (waiting
-    for one if none is connected yet); ``check`` is the :class:`WorkerCheck`, ``scaler``
-    a batch cluster's :class:`sweeps.workers.batch.JobScaler` (None otherwise)."""
-
-    scaler = None
+    for one if none is connected yet); ``check`` is the :class:`WorkerCheck`."""
 
     def __init__(self, client):
         self.client, self.check = client, WorkerCheck(client)

@@ -1,0 +1,172 @@
+"""Where a run's blocks are computed: :class:`Compute`, the one value the command line
+(``--workers``, ``--cluster``/``--jobs``, ``--scheduler``, ``--dashboard``),
+:func:`sweeps.api.run_sweep` and ``serve`` build from the user's choice and hand to
+:func:`sweeps.run.submit.submit`.
+
+It owns the dask client: made when a run needs one (:meth:`Compute.open`, or in the
+background while the submitter reads the store: :meth:`Compute.start_early`), closed by
+whoever opened it (:meth:`Compute.close`, :meth:`Compute.close_later`); a client the caller
+gave stays open. And it scales batch jobs to the work (:meth:`start` for a run's blocks,
+:meth:`shrink` as they run out, :meth:`release` between runs); for the other kinds these
+do nothing. A run small enough for threads of the submitter
+(sweeps.run.local.run_blocks_local) opens nothing and takes :attr:`threads` from it.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+
+from .batch import BatchWorkers, batch_client
+from .cluster import EarlyStart, dask_client
+from .matching import matched
+
+LOCAL, BATCH, SCHEDULER, CLIENT = "local", "batch", "scheduler", "client"
+
+
+class Compute:
+    """One of: ``workers`` local single-threaded worker processes (a LocalCluster, the
+    default), ``batch`` jobs (:class:`sweeps.workers.batch.BatchWorkers`), the dask cluster
+    at ``scheduler`` (an address), or an existing ``client`` (left open); ``dashboard`` the
+    address of the dask dashboard of a cluster made here (none by default)."""
+
+    def __init__(self, workers: int = 2, *, batch: BatchWorkers | None = None,
+                 scheduler: str | None = None, client=None, dashboard: str | None = None):
+        if sum(x is not None for x in (batch, scheduler, client)) > 1:
+            raise ValueError("compute on batch jobs, a scheduler or a client: one of them")
+        self.workers, self.batch, self.scheduler = workers, batch, scheduler
+        self.dashboard = dashboard
+        self._given = client
+        self._client = matched(client)   # a caller's client is open from the start
+        self._scaler = None              # a batch cluster's JobScaler, once open
+        self._connected = None           # the context manager of a client made here
+        self._early: EarlyStart | None = None
+
+    @classmethod
+    def chosen(cls, *, workers: int = 2, cluster: str | None = None, jobs: int = 4,
+               scheduler: str | None = None, client=None,
+               dashboard: str | None = None) -> Compute:
+        """From the user's options, the first given of: an existing ``client``, a
+        ``scheduler`` address, ``cluster`` a batch kind (``--cluster slurm``) with ``jobs``
+        jobs; else ``workers`` local workers."""
+        if client is not None:
+            return cls(workers, client=client, dashboard=dashboard)
+        if scheduler:
+            return cls(workers, scheduler=scheduler, dashboard=dashboard)
+        batch = BatchWorkers(cluster, jobs) if cluster else None
+        return cls(workers, batch=batch, dashboard=dashboard)
+
+    @property
+    def kind(self) -> str:
+        return (CLIENT if self._given is not None else SCHEDULER if self.scheduler
+                else BATCH if self.batch is not None else LOCAL)
+
+    @property
+    def where(self) -> str:
+        """What computes, in words (serve's line, the progress display)."""
+        return {LOCAL: f"local cluster of {self.workers} workers",
+                BATCH: f"up to {self.batch.jobs if self.batch else 0} "
+                       f"{self.batch.kind if self.batch else ''} batch jobs",
+                SCHEDULER: self.scheduler,
+                CLIENT: "the caller's dask client"}[self.kind]
+
+    @property
+    def threads(self) -> int:
+        """Threads of the submitter for a run that starts no cluster: as many as the
+        local workers asked for (2 for the other kinds)."""
+        return max(1, self.workers) if self.kind == LOCAL else 2
+
+    @property
+    def starts_cluster(self) -> bool:
+        """A cluster of our own (local workers, batch jobs) is started for a run: the run
+        may rather go on threads (sweeps.run.submit.small), and the start overlaps the
+        submitter's preparation (:meth:`start_early`)."""
+        return self.kind in (LOCAL, BATCH)
+
+    @property
+    def client(self):
+        """The matched dask client while open (None before :meth:`open`, or while an
+        early start is still under way)."""
+        return self._client
+
+    @property
+    def is_open(self) -> bool:
+        return self._client is not None or self._early is not None
+
+    # --- opening and closing -------------------------------------------------------------
+
+    def open(self, n_blocks: int | None = None):
+        """The client, made now if it is not open (batch jobs: no more than ``n_blocks``);
+        an early start is waited for."""
+        if self._client is None and self._early is not None:
+            return self.wait()
+        if self._client is None:
+            self._connected = self._connect(n_blocks)
+            self._client = self._connected.__enter__()
+        return self._client
+
+    def start_early(self, n_blocks: int | None, warm: tuple) -> None:
+        """Start the cluster (no more than ``n_blocks`` batch jobs) on a thread and run
+        ``warm`` (``(fn, *args)``) on its workers: :class:`sweeps.workers.cluster.EarlyStart`.
+        :meth:`wait` hands the client over."""
+        self._early = EarlyStart(self._connect(n_blocks), warm)
+
+    def wait(self, should_stop=lambda: False, notice=None, starting=None):
+        """The client of an early start once its workers are warm, or None if
+        ``should_stop()`` turned true first (EarlyStart.client)."""
+        self._client = self._early.client(should_stop, notice, starting)
+        return self._client
+
+    @property
+    def early(self) -> bool:
+        """The cluster was started by :meth:`start_early` (its workers are warm)."""
+        return self._early is not None
+
+    def close(self) -> None:
+        """Close the cluster made here (nothing for a caller's client); :meth:`open` makes
+        a fresh one after it."""
+        if self._early is not None:
+            self._early.close()
+        elif self._connected is not None:
+            self._connected.__exit__(None, None, None)
+        self._forget()
+
+    def close_later(self) -> None:
+        """:meth:`close`, for an early-started cluster on a thread (the caller reports its
+        result first: EarlyStart.close_later)."""
+        if self._early is not None:
+            self._early.close_later()
+            self._forget()
+        else:
+            self.close()
+
+    def _forget(self) -> None:
+        self._client, self._scaler = matched(self._given), None
+        self._connected = self._early = None
+
+    @contextmanager
+    def _connect(self, n_blocks: int | None):
+        """The context manager that makes a matched client of this kind."""
+        if self.kind == BATCH:
+            jobs = self.batch if n_blocks is None else self.batch.for_blocks(n_blocks)
+            with batch_client(jobs, self.dashboard) as (client, scaler):
+                self._scaler = scaler
+                yield client
+        else:
+            with dask_client(self.scheduler, self.workers, self.dashboard) as client:
+                yield client
+
+    # --- batch jobs follow the work (nothing for the other kinds) --------------------------
+
+    def start(self, n_blocks: int) -> None:
+        """A run begins with ``n_blocks`` blocks: that many batch jobs at most."""
+        if self._scaler is not None:
+            self._scaler.start(self.batch.for_blocks(n_blocks).jobs)
+
+    def shrink(self, blocks_left: int) -> None:
+        """End the batch jobs the ``blocks_left`` no longer need (JobScaler.tick)."""
+        if self._scaler is not None:
+            self._scaler.tick(blocks_left)
+
+    def release(self) -> None:
+        """The run is over: every batch job ends (serve waits holding none)."""
+        if self._scaler is not None:
+            self._scaler.release()
