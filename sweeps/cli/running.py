@@ -107,10 +107,12 @@ def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
 def _compute(args):
     """Where the blocks are computed: ``--scheduler ADDRESS``, ``--cluster KIND --jobs N``
     batch jobs, or ``--workers N`` local processes; ``--dashboard``."""
+    from ..workers.batch import BatchWorkers
     from ..workers.compute import Compute
 
-    return Compute.chosen(workers=args.workers, cluster=args.cluster, jobs=args.jobs,
-                          scheduler=args.scheduler, dashboard=args.dashboard)
+    batch = BatchWorkers(args.cluster, args.jobs) if args.cluster else None
+    return Compute.chosen(workers=args.workers, batch=batch, scheduler=args.scheduler,
+                          dashboard=args.dashboard)
 
 
 def cmd_cancel(args) -> int:

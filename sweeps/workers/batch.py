@@ -55,6 +55,11 @@ class BatchWorkers:
         """No more jobs than blocks to compute."""
         return replace(self, jobs=max(1, min(self.jobs, n_blocks)))
 
+    def client(self, dashboard: str | None = None):
+        """:func:`batch_client` on these jobs: sweeps.workers.compute calls it on the value
+        the command line built, without importing this module (off the computing path)."""
+        return batch_client(self, dashboard)
+
 
 def job_options(kind: str, dashboard: str | None = None) -> dict:
     """The keyword arguments ditherlab gives the dask-jobqueue cluster of ``kind``

@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 
-from .batch import BatchWorkers, batch_client
 from .cluster import EarlyStart, dask_client
 from .matching import matched
 
@@ -28,7 +27,7 @@ class Compute:
     at ``scheduler`` (an address), or an existing ``client`` (left open); ``dashboard`` the
     address of the dask dashboard of a cluster made here (none by default)."""
 
-    def __init__(self, workers: int = 2, *, batch: BatchWorkers | None = None,
+    def __init__(self, workers: int = 2, *, batch=None,
                  scheduler: str | None = None, client=None, dashboard: str | None = None):
         if sum(x is not None for x in (batch, scheduler, client)) > 1:
             raise ValueError("compute on batch jobs, a scheduler or a client: one of them")
@@ -41,17 +40,17 @@ class Compute:
         self._early: EarlyStart | None = None
 
     @classmethod
-    def chosen(cls, *, workers: int = 2, cluster: str | None = None, jobs: int = 4,
-               scheduler: str | None = None, client=None,
-               dashboard: str | None = None) -> Compute:
+    def chosen(cls, *, workers: int = 2, batch=None, scheduler: str | None = None,
+               client=None, dashboard: str | None = None) -> Compute:
         """From the user's options, the first given of: an existing ``client``, a
-        ``scheduler`` address, ``cluster`` a batch kind (``--cluster slurm``) with ``jobs``
-        jobs; else ``workers`` local workers."""
+        ``scheduler`` address, ``batch`` jobs (a :class:`sweeps.workers.batch.BatchWorkers`,
+        built by the command line from ``--cluster KIND --jobs N``: this module never
+        imports the batch system's options, which cannot change a number and so stay off
+        the computing path, sweeps.version); else ``workers`` local workers."""
         if client is not None:
             return cls(workers, client=client, dashboard=dashboard)
         if scheduler:
             return cls(workers, scheduler=scheduler, dashboard=dashboard)
-        batch = BatchWorkers(cluster, jobs) if cluster else None
         return cls(workers, batch=batch, dashboard=dashboard)
 
     @property
@@ -147,7 +146,7 @@ class Compute:
         """The context manager that makes a matched client of this kind."""
         if self.kind == BATCH:
             jobs = self.batch if n_blocks is None else self.batch.for_blocks(n_blocks)
-            with batch_client(jobs, self.dashboard) as (client, scaler):
+            with jobs.client(self.dashboard) as (client, scaler):
                 self._scaler = scaler
                 yield client
         else:
