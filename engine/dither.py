@@ -16,6 +16,8 @@ the constant ``square_sign(k)``.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .jit import njit
@@ -45,7 +47,7 @@ def fixed_step(kind, omega, steps_per_period, h_free):
     ``h_free`` (no dither, or no finite positive omega). ``kind`` is a :data:`CODE`. The
     driver sets each point's step with it (engine.integrators.driver), and the spec-time
     checks size a fixed step with it (sweeps.spec.accuracy, sweeps.spec.fixed_step)."""
-    if not omega > 0.0 or not np.isfinite(omega):   # no period to divide
+    if not omega > 0.0 or not math.isfinite(omega):   # no period to divide
         return h_free
     if kind == SQUARE_VELOCITY:
         return (np.pi / omega) / steps_per_period

@@ -9,6 +9,7 @@ recording at uniform instants from the dense output is a compile-time one
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from functools import cache
 from typing import NamedTuple
@@ -41,6 +42,7 @@ class PointKernel(NamedTuple):
     n_out: int             # columns of ``out``: the scalars, then N_HIST alpha_hist shares
     alloc: Callable        # alloc() -> work (method scratch)
     run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
+    shapes: tuple | None   # the shapes of alloc()'s arrays (Stepper.shapes; None: CPU only)
 
 
 def make_config(settings: Settings, record_every: int = 1, sample_dt: float = 0.0,
@@ -115,13 +117,13 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
             return status
         finish(p[P.T_END], y, p, obs, out)
         for j in range(out.size):
-            if not np.isfinite(out[j]):
+            if not math.isfinite(out[j]):
                 return S.NON_FINITE
         return S.OK
 
     n_out = len(observer.names) + (N_HIST if observer.hist else 0)
     return PointKernel(system.n, observer.size, observer.names, n_out, stepper.alloc,
-                       run_point)
+                       run_point, stepper.shapes)
 
 
 @cache

@@ -12,6 +12,8 @@ Eq. 2.7 is printed with z; it is read with |z| so that the law is odd (docs/MODE
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..jit import njit
@@ -33,7 +35,7 @@ def alpha(z, u, gu, sigma0, lam):
         return 0.0
     if az >= zss:
         return 1.0
-    return 0.5 * np.sin(np.pi * (az - 0.5 * (zss + zba)) / (zss - zba)) + 0.5
+    return 0.5 * math.sin(np.pi * (az - 0.5 * (zss + zba)) / (zss - zba)) + 0.5
 
 
 @njit(cache=True, error_model="numpy")

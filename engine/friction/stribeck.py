@@ -17,7 +17,7 @@ DP5's contracted stage sums may differ in the last bits, tests/engine/test_folde
 """
 from __future__ import annotations
 
-import numpy as np
+import math
 
 from .. import params as P
 from ..jit import njit
@@ -26,13 +26,13 @@ from ..jit import njit
 @njit(inline="always", error_model="numpy")
 def _square(x, delta):
     """exp(-x**2): delta = 2 (Sec. 4), without pow (``delta`` unused)."""
-    return np.exp(-x * x)
+    return math.exp(-x * x)
 
 
 @njit(inline="always", error_model="numpy")
 def _linear(x, delta):
     """exp(-|x|): delta = 1 (Sec. 3), without pow (``delta`` unused)."""
-    return np.exp(-abs(x))
+    return math.exp(-abs(x))
 
 
 @njit(cache=True, error_model="numpy")
@@ -42,7 +42,7 @@ def decay(x, delta):
         return _square(x, delta)
     if delta == 1.0:
         return _linear(x, delta)
-    return np.exp(-abs(x) ** delta)
+    return math.exp(-abs(x) ** delta)
 
 
 def _curves(dec, **options):

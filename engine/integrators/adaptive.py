@@ -111,6 +111,7 @@ class Method(NamedTuple):
     on_accept: Callable    # on_accept(err_trial, hh_trial, err, hh, st) -> h_next, after an
     #                        accepted step (hh, err), which may be the landing on a kink
     #                        retaken from the trial (hh_trial, err_trial)
+    shapes: tuple | None = None  # alloc()'s array shapes (engine.integrators.Stepper.shapes)
 
 
 def make_stepper(problem, method: Method) -> Stepper:
@@ -247,4 +248,6 @@ def make_stepper(problem, method: Method) -> Stepper:
         st[W_H] = h
         return S.OK
 
-    return Stepper(alloc, segment)
+    shapes = None if method.shapes is None else (
+        method.shapes, (n_dense, n), (3, n), (5, n_g), (n_st,))
+    return Stepper(alloc, segment, shapes)

@@ -193,7 +193,7 @@ def make_method(problem) -> Method:
         return hh_trial * _factor(err_trial, st[W_REJ] != 0.0)
 
     return Method(alloc, 0, 4, 6, restart, prepare, attempt, coeffs, dense_eval, advance,
-                  on_reject, on_accept)
+                  on_reject, on_accept, ((7, n), (1, n)))
 
 
 def make_stepper(problem) -> Stepper:

@@ -18,6 +18,8 @@ each segment into ``ceil(length / h)`` equal steps).
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .. import params as P
@@ -72,7 +74,7 @@ def make_solve(stepper, observer, dither: str):
                     fresh = FRESH_SWITCH
                 k += 1
         for i in range(y.size):
-            if not np.isfinite(y[i]):
+            if not math.isfinite(y[i]):
                 return S.NON_FINITE
         return S.OK
     return solve

@@ -73,6 +73,9 @@ class Stepper(NamedTuple):
 
     alloc: Callable        # alloc() -> work
     segment: Callable      # segment(work, y, t0, t1, p, sq, fresh, cfg, obs, ctr, rec) -> status
+    shapes: tuple | None = None  # the shapes of alloc()'s arrays, nested as its tuple (all
+    #                        float64, zeroed): how a GPU thread allocates the same work in
+    #                        its local memory (engine.gpu); None: the method runs on the CPU only
 
 
 @njit(error_model="numpy", refcount=False)

@@ -133,4 +133,4 @@ def make_stepper(problem) -> Stepper:
                 return S.FAILED
         return S.OK
 
-    return Stepper(alloc, segment)
+    return Stepper(alloc, segment, ((8, n), (3, n), (1,)))

@@ -15,7 +15,8 @@ the only dynamics and are error-controlled (:meth:`Contact.error_size`).
 """
 from __future__ import annotations
 
-import numpy as np
+import math
+
 
 from .. import params as P
 from ..contract import MechanicalSystem, ModelError, SystemKernels
@@ -42,7 +43,7 @@ def make_speed(b):
         if kind == SQUARE_VELOCITY:
             return p[P.V_REF] + p[P.W] * sq
         if kind == SINE_VELOCITY:
-            return p[P.V_REF] + p[P.W] * np.cos(p[P.OMEGA] * t)
+            return p[P.V_REF] + p[P.W] * math.cos(p[P.OMEGA] * t)
         return p[P.V_REF]
     return speed
 

@@ -86,10 +86,10 @@ class Servo(MechanicalSystem):
                 u += p[P.W] * sq
             elif kind == SINE_VELOCITY:
                 wt = p[P.OMEGA] * t
-                u += p[P.W] * np.sin(wt)
-                hold = p[im] * p[P.W] * p[P.OMEGA] * np.cos(wt)
+                u += p[P.W] * math.sin(wt)
+                hold = p[im] * p[P.W] * p[P.OMEGA] * math.cos(wt)
             elif kind == SINE_FORCE:
-                f += p[im] * p[P.W] * p[P.OMEGA] * np.sin(p[P.OMEGA] * t)
+                f += p[im] * p[P.W] * p[P.OMEGA] * math.sin(p[P.OMEGA] * t)
             return u, f, f + hold
 
         @b.jit(inline="always", error_model="numpy")

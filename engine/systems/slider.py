@@ -21,7 +21,8 @@ from two values of ``e``).
 """
 from __future__ import annotations
 
-import numpy as np
+import math
+
 
 from .. import params as P
 from ..contract import MechanicalSystem, SystemKernels
@@ -39,17 +40,17 @@ def make_drive(b, slow: bool):
     def drive(t, y, p, sq):
         fext = y[E]
         if slow:
-            fext += p[P.SLOW_A] * np.sin(p[P.SLOW_OMEGA] * t)
+            fext += p[P.SLOW_A] * math.sin(p[P.SLOW_OMEGA] * t)
         u = y[V]
         hold = 0.0
         if kind == SQUARE_VELOCITY:
             u += p[P.W] * sq
         elif kind == SINE_VELOCITY:
             wt = p[P.OMEGA] * t
-            u += p[P.W] * np.sin(wt)
-            hold = p[P.W] * p[P.OMEGA] * np.cos(wt)
+            u += p[P.W] * math.sin(wt)
+            hold = p[P.W] * p[P.OMEGA] * math.cos(wt)
         elif kind == SINE_FORCE:
-            fext += p[P.W] * p[P.OMEGA] * np.sin(p[P.OMEGA] * t)
+            fext += p[P.W] * p[P.OMEGA] * math.sin(p[P.OMEGA] * t)
         return u, fext, fext + hold
     return drive
 

@@ -1,0 +1,215 @@
+"""The GPU target: the engine's own kernels compiled by numba.cuda, one thread a point.
+
+There is no second copy of the physics. A scene's point integrator
+(:func:`engine.kernels.point_kernel`: system, friction law, dither, observables, method,
+all ``njit`` closures) is called from a CUDA kernel; numba.cuda compiles every ``njit``
+function it reaches for the GPU (``numba.cuda.target.CUDATypingContext.resolve_value_type``
+turns a CPU dispatcher into a device function), float64 throughout. What differs per target
+is only where a point's scratch lives: the CPU block kernel allocates it once per block with
+numpy, a GPU thread takes it from its local memory, shaped by the method's
+:attr:`engine.integrators.Stepper.shapes` and zeroed. The kernel's source is generated from
+those shapes (:func:`kernel_source`), since ``cuda.local.array`` wants literal shapes.
+
+Each thread reads its point's row of ``points``, overrides the four grid columns of a local
+copy of ``p`` and runs ``run_point`` with its own settings record (the driver writes the
+per-point fixed step and tolerances into it). Methods without ``shapes`` (the Rosenbrock
+solver: dense ``n x n`` matrices) stay on the CPU: :func:`unsupported` says why.
+
+The GPU's float64 differs from the CPU's in its ``exp``/``pow`` and in fused multiply-adds,
+so a GPU cube agrees with a CPU cube within the accuracy level, not bit for bit
+(``../shared/recipes/gpu.md``: 8e-14 on a fixed-step LuGre trajectory).
+
+``NUMBA_ENABLE_CUDASIM=1`` runs the same kernel in numba's CUDA simulator (no GPU, slow):
+the tests' way to check the kernel's indexing and scratch handling without a GPU.
+"""
+from __future__ import annotations
+
+import math
+import os
+from functools import cache
+
+import numpy as np
+from numba.core.errors import NumbaError
+
+from . import params as P
+from .integrators.problem import CTR_SIZE
+from .kernels import method_module, point_kernel
+
+THREADS_PER_BLOCK = 128   # a CUDA block of threads (points); 4 warps
+COLS = (P.W, P.OMEGA, P.V_REF, P.VD)
+
+
+class NoGPU(RuntimeError):
+    """No usable CUDA device (or no numba.cuda): the message says what to do."""
+
+
+def simulated() -> bool:
+    """True under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``)."""
+    return os.environ.get("NUMBA_ENABLE_CUDASIM", "") not in ("", "0")
+
+
+def check_device() -> str:
+    """The GPU's name (``"simulator"`` under the CUDA simulator); :class:`NoGPU` if none."""
+    try:
+        from numba import cuda
+    except ImportError as exc:   # pragma: no cover -- numba ships numba.cuda
+        raise NoGPU(f"numba.cuda cannot be imported ({exc}); "
+                    "install the GPU extra: pip install -e '.[gpu]'") from None
+    if simulated():
+        return "simulator"
+    try:
+        available = cuda.is_available()
+    except Exception:   # noqa: BLE001 -- a broken driver install answers with any error
+        available = False
+    if not available:
+        raise NoGPU("no CUDA GPU here (numba.cuda.is_available() is False): run without "
+                    "--device cuda, or on a machine with an NVIDIA GPU and "
+                    "pip install -e '.[gpu]'")
+    dev = cuda.get_current_device()
+    name = dev.name.decode() if isinstance(dev.name, bytes) else str(dev.name)
+    return f"{name} (cc {dev.compute_capability[0]}.{dev.compute_capability[1]})"
+
+
+def unsupported(scene) -> str | None:
+    """Why ``scene`` cannot run on the GPU (None: it can)."""
+    if scene.path != "simulate":
+        return f"the {scene.path!r} path has no time integration (it runs on the CPU)"
+    if point_kernel(scene).shapes is None:
+        return (f"the {method_module(scene).NAME!r} integrator runs on the CPU only "
+                "(dense n x n matrices per point)")
+    return None
+
+
+def _alloc_lines(shapes, prefix: str) -> tuple[list[str], str]:
+    """Source lines allocating and zeroing local arrays shaped as ``shapes`` (nested
+    tuples, leaves are shape tuples), and the expression of the nested tuple."""
+    if shapes and isinstance(shapes[0], int):        # a leaf: one array
+        name = f"w{prefix}"
+        lines = [f"{name} = cuda.local.array({tuple(shapes)!r}, float64)"]
+        idx = ", ".join(f"i{d}" for d in range(len(shapes)))
+        indent = ""
+        for d, size in enumerate(shapes):
+            lines.append(f"{indent}for i{d} in range({size}):")
+            indent += "    "
+        lines.append(f"{indent}{name}[{idx}] = 0.0")
+        return lines, name
+    lines, parts = [], []
+    for k, sub in enumerate(shapes):
+        sub_lines, expr = _alloc_lines(sub, f"{prefix}_{k}")
+        lines += sub_lines
+        parts.append(expr)
+    return lines, "(" + ", ".join(parts) + ("," if len(parts) == 1 else "") + ")"
+
+
+def _simulator_array(a):
+    """The numpy array behind a simulated device array (the simulator wraps the kernel's
+    arguments; the engine's njit functions take numpy arrays)."""
+    item = a.__dict__.get("_item") if hasattr(a, "__dict__") else None
+    return item._ary if item is not None else a
+
+
+def kernel_source(shapes, n: int, obs_size: int, n_out: int, n_params: int,
+                  simulator: bool = False) -> str:
+    """The CUDA kernel's Python source for one scene (sizes and shapes as literals).
+    ``simulator``: unwrap the simulator's device arrays before the engine's calls."""
+    alloc, work = _alloc_lines(shapes, "")
+    body = "\n".join("    " + line for line in alloc)
+    host = "host" if simulator else ""
+    return f'''
+def block(points, p, cfgs, rec, out, status, counters):
+    j = cuda.grid(1)
+    if j >= points.shape[0]:
+        return
+    q = cuda.local.array({n_params}, float64)
+    for i in range({n_params}):
+        q[i] = p[i]
+    for c in range(4):
+        q[COLS[c]] = points[j, c]
+    y = cuda.local.array({n}, float64)
+    obs = cuda.local.array({max(obs_size, 1)}, float64)
+    o = cuda.local.array({n_out}, float64)
+    ctr = cuda.local.array({CTR_SIZE}, int64)
+{body}
+    status[j] = run_point(q, {host}(cfgs[j:j + 1]), {work}, y, obs[:{obs_size}], o, ctr,
+                          {host}(rec))
+    for c in range({n_out}):
+        out[j, c] = o[c]
+    for c in range(3):
+        counters[j, c] = ctr[c]
+'''
+
+
+def kernel_namespace(pk) -> dict:
+    """The globals of a scene's kernel source: numba.cuda, the types, the grid columns
+    and the scene's ``run_point`` (engine.kernels.PointKernel ``pk``)."""
+    from numba import cuda, float64, int64
+
+    return {"cuda": cuda, "float64": float64, "int64": int64, "COLS": COLS,
+            "run_point": pk.run_point, "host": _simulator_array}
+
+
+@cache
+def block_kernel(scene):
+    """The CUDA kernel ``block[grid, threads](points, p, cfgs, rec, out, status, counters)``
+    of ``scene`` (compiled at its first launch, once per process and argument types)."""
+    from numba import cuda
+
+    why = unsupported(scene)
+    if why:
+        raise ValueError(f"device cuda: {why}")
+    pk = point_kernel(scene)
+    source = kernel_source(pk.shapes, pk.n, pk.obs_size, pk.n_out, scene.n_params,
+                           simulated())
+    namespace = kernel_namespace(pk)
+    exec(compile(source, f"<engine.gpu kernel of {scene.friction}/{scene.system}>", "exec"),
+         namespace)
+    return cuda.jit(namespace["block"])
+
+
+def cost_order(points: np.ndarray) -> np.ndarray:
+    """The order the GPU runs ``points`` in: by dither frequency, highest first (a point's
+    steps grow with omega: fixed steps per half-period, or the adaptive step following the
+    dither), so the 32 threads of a warp, which wait for their slowest, finish together."""
+    return np.argsort(-points[:, 1], kind="stable")
+
+
+def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
+    """Integrate ``points`` on the GPU: ``(out, status, counters, seconds)`` as the CPU
+    block kernel fills them (``engine.blocks.run_block``), in the caller's order;
+    ``seconds`` is the kernel's wall time, transfers included."""
+    import time
+
+    from numba import cuda
+
+    check_device()
+    pk = point_kernel(scene)
+    order = cost_order(points)
+    points = np.ascontiguousarray(points[order])
+    m = points.shape[0]
+    kernel = block_kernel(scene)
+    cfgs = np.repeat(cfg, max(m, 1))
+    rec = np.empty((0, pk.n + 1))
+    out = np.full((m, pk.n_out), np.nan)
+    status = np.zeros(m, dtype=np.int8)
+    counters = np.zeros((m, 3), dtype=np.int64)
+    if m == 0:
+        return out, status, counters, 0.0
+    t0 = time.perf_counter()
+    d_out, d_status, d_counters = (cuda.to_device(a) for a in (out, status, counters))
+    grid = math.ceil(m / THREADS_PER_BLOCK)
+    try:
+        kernel[grid, THREADS_PER_BLOCK](cuda.to_device(points), cuda.to_device(p),
+                                        cuda.to_device(cfgs), cuda.to_device(rec),
+                                        d_out, d_status, d_counters)
+    except (NumbaError, TypeError) as exc:   # compiled at the first launch
+        first = str(exc).strip().splitlines()
+        raise ValueError(
+            f"device cuda: the {scene.friction}/{scene.system} kernel does not compile for "
+            f"the GPU ({type(exc).__name__}: {first[0] if first else ''}); its functions "
+            "must use math.* for elementary functions, not numpy ufuncs (docs/MODELS.md), "
+            "or run without --device cuda") from None
+    cuda.synchronize()
+    back = np.empty_like(order)
+    back[order] = np.arange(m)
+    out, status = d_out.copy_to_host()[back], d_status.copy_to_host()[back]
+    return out, status, d_counters.copy_to_host()[back], time.perf_counter() - t0

@@ -1,0 +1,216 @@
+"""GPU against all CPU cores of the same machine, and against the hand-written GPU kernel.
+
+    python3 scripts/bench_gpu.py                    # on a machine with an NVIDIA GPU
+    python3 scripts/bench_gpu.py --points 131072 --cpu-points 8192 --fig14 961
+    NUMBA_ENABLE_CUDASIM=1 python3 scripts/bench_gpu.py --smoke    # anywhere: the script runs
+
+One run prints, with the CPU model, its core count and the GPU's name:
+
+1. the anchors' scene (``../shared/anchors/README.md``: LuGre slider, square-velocity dither
+   W in [0, 0.8), omega = 1000, v_ref = 0.4, tau in [0, 100], fixed-step RK4 with 2 steps a
+   half-period aligned to the switches) through ``engine.blocks.run_block``: points/s on the
+   GPU (``device="cuda"``, one thread a point, engine/gpu.py) and on every CPU core (one
+   thread per core, each running the CPU block kernel on its share: the kernels release the
+   GIL), their ratio, and the hand kernel ``../shared/anchors/anchor_cuda.py`` (constants
+   compiled in) at the same point count as the limit;
+2. Fig. 14's scene (specs/fig14.toml at its standard level: LuGre, square-velocity dither,
+   the spec's integrator and tolerances) on a W x omega grid over the spec's ranges, GPU
+   and all CPU cores;
+3. agreement: the largest relative difference GPU vs CPU over the points both computed,
+   per output (fixed step: the promise is 1e-9 relative; adaptive: the level's).
+
+Times are medians of ``--repeats`` after a warm-up launch (which compiles). The CPU side
+runs ``--cpu-points`` points (fewer than the GPU's: a core needs ~10 ms a point here) and
+its rate is points/s over all cores.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+ANCHOR_CUDA = ROOT.parent / "shared" / "anchors" / "anchor_cuda.py"
+
+# numba-cuda 0.30 registers overloads for names numpy 2.5 removed (../shared/recipes/gpu.md)
+for _old, _new in (("row_stack", "vstack"), ("trapz", "trapezoid"), ("in1d", "isin")):
+    if not hasattr(np, _old) and hasattr(np, _new):
+        setattr(np, _old, getattr(np, _new))
+
+
+def cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+
+
+def anchors_case(n: int, t_end: float):
+    """``(scene, p, points, settings)`` of the anchors' fig10 scene, W over [0, 0.8)."""
+    from engine import Scene, Settings
+    from engine import params as P
+
+    p = P.pack(t_end=t_end, t_transient=0.5 * t_end, v_ref=0.4, omega=1000.0)
+    scene = Scene.from_params(p, dither="square-velocity", integrator="rk4",
+                              outputs=("v_mean", "v_slow_p2p"))
+    W = 0.8 * np.arange(n) / n
+    points = np.column_stack([W, np.full(n, 1000.0), np.full(n, 0.4), np.full(n, p[P.VD])])
+    return scene, p, points, Settings(steps_per_period=2)
+
+
+def fig14_case(n: int, t_end: float | None):
+    """Fig. 14's plan (specs/fig14.toml, its level) on a ``sqrt(n) x sqrt(n)`` W x omega grid."""
+    from engine import params as P
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec.load import load_spec
+
+    plan = make_plan(load_spec(ROOT / "specs" / "fig14.toml"))
+    side = max(1, int(round(n ** 0.5)))
+    coords = plan.grid.coords
+    W = np.linspace(coords["W"].min(), coords["W"].max(), side)
+    omega = np.linspace(coords["omega"].min(), coords["omega"].max(), side)
+    WW, OO = np.meshgrid(W, omega, indexing="ij")
+    p = plan.params.copy()
+    if t_end is not None:
+        p[P.T_END], p[P.T_TRANSIENT] = t_end, 0.5 * t_end
+    points = np.column_stack([WW.ravel(), OO.ravel(), np.full(WW.size, coords["v_ref"][0]),
+                              np.full(WW.size, coords["v_d"][0])])
+    return plan.scene, p, points, plan.numerics.settings
+
+
+def timed(fn, repeats: int) -> tuple[float, object]:
+    fn()   # warm-up: compiles (GPU) or loads the kernel cache (CPU)
+    times, result = [], None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times)), result
+
+
+def on_cpu(scene, p, points, settings, threads: int):
+    """All cores: the points in ``threads`` interleaved shares, one thread each."""
+    from engine.blocks import run_block
+
+    shares = [np.arange(k, len(points), threads) for k in range(threads)]
+    with ThreadPoolExecutor(threads) as pool:
+        parts = list(pool.map(lambda ix: run_block(scene, points[ix], p, settings), shares))
+    outputs = {}
+    for name in parts[0].outputs:
+        col = np.empty(len(points))
+        for ix, part in zip(shares, parts):
+            col[ix] = part.outputs[name]
+        outputs[name] = col
+    return outputs
+
+
+def on_gpu(scene, p, points, settings):
+    from engine.blocks import run_block
+
+    return run_block(scene, points, p, settings, device="cuda").outputs
+
+
+def agreement(cpu: dict, gpu: dict, k: int) -> dict:
+    out = {}
+    for name, c in cpu.items():
+        g = gpu[name][:k]
+        scale = np.maximum(np.abs(c), 1e-300)
+        rel = np.abs(g - c) / scale
+        out[name] = float(np.nanmax(rel)) if np.isfinite(rel).any() else float("nan")
+    return out
+
+
+def hand_kernel(n: int, t_end: float) -> dict | None:
+    if not ANCHOR_CUDA.is_file():
+        return None
+    proc = subprocess.run([sys.executable, str(ANCHOR_CUDA), str(n), "--tend", str(t_end)],
+                          capture_output=True, text=True, timeout=600)
+    if proc.returncode != 0:
+        return {"error": proc.stderr.strip().splitlines()[-1:]}
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def row(label: str, n: int, seconds: float) -> str:
+    return f"| {label} | {n:,} | {seconds:.3f} s | {n / seconds:,.0f} |"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--points", type=int, default=131072, help="GPU points, anchors' scene")
+    ap.add_argument("--cpu-points", type=int, default=8192, help="CPU points, anchors' scene")
+    ap.add_argument("--fig14", type=int, default=961, help="Fig. 14 points (GPU and CPU)")
+    ap.add_argument("--tend", type=float, default=100.0, help="tau span of the anchors' scene")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--smoke", action="store_true",
+                    help="a few points on a short span (the CUDA simulator)")
+    args = ap.parse_args()
+    fig14_tend = None
+    if args.smoke:
+        args.points, args.cpu_points, args.fig14, args.tend, args.repeats = 64, 16, 4, 0.5, 1
+        fig14_tend = 0.5
+
+    from engine import gpu
+
+    device = gpu.check_device()
+    threads = cores()
+    print(f"CPU: {cpu_model()}, {threads} cores; GPU: {device}; numba "
+          f"{__import__('numba').__version__}", flush=True)
+    print("\n| run | points | time | points/s |\n| --- | --- | --- | --- |", flush=True)
+    report = {"cpu": cpu_model(), "cores": threads, "gpu": device}
+
+    scene, p, points, settings = anchors_case(args.points, args.tend)
+    t_gpu, g_out = timed(lambda: on_gpu(scene, p, points, settings), args.repeats)
+    print(row("anchors scene, engine on the GPU", args.points, t_gpu), flush=True)
+    cpu_pts = points[:args.cpu_points]
+    t_cpu, c_out = timed(lambda: on_cpu(scene, p, cpu_pts, settings, threads), args.repeats)
+    print(row(f"anchors scene, engine on {threads} CPU cores", len(cpu_pts), t_cpu), flush=True)
+    hand = hand_kernel(args.points, args.tend)
+    if hand and "points_per_s" in hand:
+        print(row("anchors scene, hand kernel (anchor_cuda.py)", args.points, hand["seconds"]),
+              flush=True)
+    a_ratio = (args.points / t_gpu) / (len(cpu_pts) / t_cpu)
+    report["anchors"] = {"gpu_pps": args.points / t_gpu, "cpu_pps": len(cpu_pts) / t_cpu,
+                         "ratio": a_ratio, "hand": hand,
+                         "agreement": agreement(c_out, g_out, len(cpu_pts))}
+
+    scene, p, points, settings = fig14_case(args.fig14, fig14_tend)
+    t_gpu, g_out = timed(lambda: on_gpu(scene, p, points, settings), args.repeats)
+    print(row(f"Fig. 14 scene ({scene.integrator}), engine on the GPU", len(points), t_gpu),
+          flush=True)
+    t_cpu, c_out = timed(lambda: on_cpu(scene, p, points, settings, threads), args.repeats)
+    print(row(f"Fig. 14 scene, engine on {threads} CPU cores", len(points), t_cpu), flush=True)
+    f_ratio = t_cpu / t_gpu
+    report["fig14"] = {"points": len(points), "gpu_s": t_gpu, "cpu_s": t_cpu, "ratio": f_ratio,
+                       "agreement": agreement(c_out, g_out, len(points))}
+
+    print(f"\nGPU / {threads} CPU cores: anchors scene {a_ratio:.0f}x, Fig. 14 {f_ratio:.0f}x",
+          flush=True)
+    if hand and "points_per_s" in hand:
+        print(f"engine / hand kernel on the GPU: "
+              f"{(args.points / t_gpu) / hand['points_per_s']:.2f}", flush=True)
+    for name in ("anchors", "fig14"):
+        worst = max(report[name]["agreement"].values())
+        print(f"{name}: largest relative difference GPU vs CPU {worst:.1e} "
+              f"({report[name]['agreement']})", flush=True)
+    print(json.dumps(report), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

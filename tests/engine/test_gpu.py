@@ -1,0 +1,122 @@
+"""The GPU target (engine/gpu.py, issue 36) without a GPU.
+
+- numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, in a child process: numba reads it at
+  import) runs the generated kernel of every case of tests/engine/gpu_cases.py: one thread a
+  point, the per-thread settings record and scratch, the output and counter columns. In the
+  simulator the engine's functions run as their CPU machine code, so the GPU path must equal
+  the CPU block kernel bit for bit; on a GPU (its own exp and fused multiply-adds) the
+  promise is the accuracy level's (scripts/bench_gpu.py compares there).
+- The scratch a GPU thread allocates (Stepper.shapes) mirrors the CPU's ``alloc()``.
+- No GPU: ``device="cuda"`` is one clear error; the Rosenbrock solver and the analysis paths
+  say they stay on the CPU.
+
+The device build's type check (PTX for a Hopper GPU, no GPU needed but the CUDA compiler)
+is scripts/gpu_check.py, run where the ``gpu`` extra is installed.
+"""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from engine import gpu
+from engine.blocks import run_block
+from engine.kernels import point_kernel
+from tests.engine.common import scene
+from tests.engine.gpu_cases import CASES, build
+
+ROOT = Path(__file__).resolve().parents[2]
+
+# one child for every case (numba and the engine imported once): a JSON line per case
+CHILD = """
+import json, sys
+import numpy as np
+from engine.blocks import run_block
+from tests.engine.gpu_cases import build
+
+for case_id in sys.argv[1:]:
+    scene, p, points, settings = build(case_id)
+    cpu = run_block(scene, points, p, settings)
+    dev = run_block(scene, points, p, settings, device="cuda")
+    print(json.dumps({
+        "case": case_id,
+        "equal": {k: bool(np.array_equal(cpu.outputs[k], dev.outputs[k], equal_nan=True))
+                  for k in cpu.outputs},
+        "finite": {k: bool(np.isfinite(cpu.outputs[k]).any()) for k in cpu.outputs},
+        "status": [cpu.status.tolist(), dev.status.tolist()],
+        "counters": [[cpu.steps.tolist(), cpu.rejected.tolist(), cpu.evals.tolist()],
+                     [dev.steps.tolist(), dev.rejected.tolist(), dev.evals.tolist()]],
+    }), flush=True)
+"""
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    """case id -> what the child saw (run once for the module: ~1 min a case on 2 cores,
+    the CPU kernels' compilation)."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1",
+           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", CHILD, *sorted(CASES)], capture_output=True,
+                          text=True, env=env, cwd=ROOT, timeout=3600)
+    lines = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith("{")]
+    return {got["case"]: got for got in lines}, proc
+
+
+@pytest.mark.long
+@pytest.mark.subprocess
+@pytest.mark.parametrize("case_id", sorted(CASES))
+def test_the_simulated_gpu_kernel_equals_the_cpu_block_kernel(simulated, case_id):
+    by_case, proc = simulated
+    assert case_id in by_case, proc.stderr[-3000:]
+    got = by_case[case_id]
+    cpu_status, dev_status = got["status"]
+    assert dev_status == cpu_status and all(s == 0 for s in cpu_status), got["status"]
+    assert got["counters"][0] == got["counters"][1]
+    assert all(got["equal"].values()), got["equal"]
+    assert all(got["finite"].values()), got["finite"]   # the case computes real numbers
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "dopri5"])
+def test_the_gpu_scratch_mirrors_the_cpu_scratch(integrator):
+    pk = point_kernel(scene(integrator=integrator))
+
+    def shapes_of(work):
+        return tuple(shapes_of(w) for w in work) if isinstance(work, tuple) else work.shape
+
+    assert shapes_of(pk.alloc()) == pk.shapes
+
+
+def test_the_kernel_source_zeroes_every_scratch_array():
+    text = gpu.kernel_source(((7, 4), (1, 4)), n=4, obs_size=0, n_out=2, n_params=30)
+    assert "cuda.local.array((7, 4), float64)" in text and text.count("= 0.0") == 2
+    assert "obs[:0]" in text and "cuda.local.array(30, float64)" in text
+    nested = gpu.kernel_source((((7, 4), (1, 4)), (5, 4), (3,)), 4, 3, 2, 30)
+    assert "((w_0_0, w_0_1), w_1, w_2)" in nested
+
+
+def test_without_a_gpu_the_cuda_device_is_one_clear_error():
+    if gpu.simulated():
+        pytest.skip("this process runs under the CUDA simulator")
+    sc, p, points, settings = build("lugre-square-rk4")
+    with pytest.raises(gpu.NoGPU, match=r"no CUDA GPU here .* run without --device cuda"):
+        run_block(sc, points, p, settings, device="cuda")
+    with pytest.raises(ValueError, match=r"device: expected one of \('cpu', 'cuda'\)"):
+        run_block(sc, points, p, settings, device="gpu")
+
+
+def test_what_stays_on_the_cpu_says_why():
+    assert gpu.unsupported(scene(integrator="rk4")) is None
+    assert "runs on the CPU only" in gpu.unsupported(scene(integrator="rosenbrock"))
+    assert "no time integration" in gpu.unsupported(scene().with_(path="averaged"))
+    with pytest.raises(ValueError, match="device cuda: the 'rodas4' integrator"):
+        gpu.block_kernel(scene(integrator="rosenbrock"))
+
+
+def test_run_sorts_nothing_away():
+    """Points come back in the caller's order, whatever order the GPU runs them in."""
+    order = gpu.cost_order(np.array([[0.1, 300.0, 0.4, 0.1], [0.1, 10.0, 0.4, 0.1],
+                                     [0.1, 100.0, 0.4, 0.1]]))
+    assert order.tolist() == [0, 2, 1]
