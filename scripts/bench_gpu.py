@@ -113,7 +113,7 @@ def on_cpu(scene, p, points, settings, threads: int):
         parts = list(pool.map(lambda ix: run_block(scene, points[ix], p, settings), shares))
     outputs = {}
     for name in parts[0].outputs:
-        col = np.empty(len(points))
+        col = np.empty((len(points), *parts[0].outputs[name].shape[1:]))
         for ix, part in zip(shares, parts):
             col[ix] = part.outputs[name]
         outputs[name] = col
@@ -199,7 +199,7 @@ def main() -> int:
     report["fig14"] = {"points": len(points), "gpu_s": t_gpu, "cpu_s": t_cpu, "ratio": f_ratio,
                        "agreement": agreement(c_out, g_out, len(points))}
 
-    print(f"\nGPU / {threads} CPU cores: anchors scene {a_ratio:.0f}x, Fig. 14 {f_ratio:.0f}x",
+    print(f"\nGPU / {threads} CPU cores: anchors scene {a_ratio:.3g}x, Fig. 14 {f_ratio:.3g}x",
           flush=True)
     if hand and "points_per_s" in hand:
         print(f"engine / hand kernel on the GPU: "
