@@ -61,11 +61,11 @@ class Compute:
     @property
     def where(self) -> str:
         """What computes, in words (serve's line, the progress display)."""
-        return {LOCAL: f"local cluster of {self.workers} workers",
-                BATCH: f"up to {self.batch.jobs if self.batch else 0} "
-                       f"{self.batch.kind if self.batch else ''} batch jobs",
-                SCHEDULER: self.scheduler,
-                CLIENT: "the caller's dask client"}[self.kind]
+        kind = self.kind
+        if kind == BATCH:
+            return f"up to {self.batch.jobs} {self.batch.kind} batch jobs"
+        return {LOCAL: f"local cluster of {self.workers} workers", SCHEDULER: self.scheduler,
+                CLIENT: "the caller's dask client"}[kind]
 
     @property
     def threads(self) -> int:
