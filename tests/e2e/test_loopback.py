@@ -15,8 +15,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from ..helpers import BIN, ditherlab, gated, wait_for
-from .conftest import SIMULATE_SPEC
+from ..helpers import BIN, SIMULATE_SPEC, ditherlab, gated, wait_for
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # every socket of submit and serve

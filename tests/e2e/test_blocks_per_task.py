@@ -1,6 +1,9 @@
 """Beyond the submitter's ceiling the dispatch gives each task several blocks
 (sweeps.planning.plan.blocks_per_task): the workers then ask for fewer tasks a second, and
-the journal still receives every block, each with its own points' results."""
+the journal still receives every block, each with its own points' results.
+
+Here the dispatch on an in-process dask cluster; the rule alone:
+tests/sweeps/planning/test_blocks_per_task.py."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,21 +11,13 @@ import pytest
 
 from store.record import BlockRecord
 from sweeps.planning import plan as planning
-from sweeps.planning.plan import blocks_per_task, make_plan
+from sweeps.planning.plan import make_plan
 from sweeps.run import dispatch
 from sweeps.spec import parse_spec
 from sweeps.version import results_fingerprint
 from sweeps.workers import task
 
-
-def test_one_block_a_task_below_the_ceiling_more_beyond():
-    assert blocks_per_task(2, 1.0, 1000, ceiling=200) == 1          # a workstation
-    assert blocks_per_task(200, 1.0, 10**5, ceiling=200) == 1       # at the ceiling
-    assert blocks_per_task(1000, 1.0, 10**5, ceiling=200) == 5      # 1000 / 5 s = 200/s
-    assert blocks_per_task(1000, 0.01, 10**6, ceiling=200) == 500   # cheap blocks
-    assert blocks_per_task(1000, 1.0, 2500, ceiling=200) == 2       # every thread gets one
-    assert blocks_per_task(1000, 1.0, 10, ceiling=200) == 1
-    assert blocks_per_task(0, 1.0, 10) == blocks_per_task(4, 0.0, 10) == 1
+pytestmark = pytest.mark.cluster   # what it starts (tests/conftest.py)
 
 
 TASK_POINTS: list[int] = []   # points of each task computed (the workers are threads here)

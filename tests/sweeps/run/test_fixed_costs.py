@@ -1,0 +1,94 @@
+"""The fixed costs around a sweep's points (issue 37): the error estimate's re-runs among the
+blocks, longest expected first; a small sweep on threads of the submitting process, writing
+the cube a cluster writes; one compilation of a scene per machine; a kill while the
+re-runs run among the blocks leaves a resumable sweep.
+
+Here the order of the tasks and the pricing of a small sweep; what needs a cluster or
+processes: tests/e2e/test_fixed_costs.py."""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+
+from sweeps.estimates.error_reruns import SampleRuns
+from sweeps.planning.plan import make_plan, work_s
+from sweeps.run import local
+from sweeps.run.submit import small
+from sweeps.spec import parse_spec
+from sweeps.workers import task
+from sweeps.workers.threads import ThreadClient
+
+
+# 16 points, 4 omegas: blocks of one omega each cost alike, and the re-runs (one level
+# finer, 12 of the 16 points) cost more or less than a block
+SPEC = {"name": "fixed-costs", "friction": "lugre", "dither": "square-velocity",
+        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
+        "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
+        "grid": {"W": [0.1, 0.3, 0.5, 0.7], "omega": [100.0, 300.0, 1000.0, 3000.0],
+                 "v_ref": [0.4], "v_d": [0.1]}}
+
+
+class _Sink:
+    """What the local dispatch needs of a BlockSink: journal nothing, never stop."""
+
+    def __init__(self):
+        self.blocks = []
+
+    def __call__(self, b, record):
+        self.blocks.append(b)
+
+    def should_stop(self):
+        return False
+
+
+class _Bar:
+    def update(self, n):
+        pass
+
+    def set_postfix_str(self, text):
+        pass
+
+    def keep_alive(self):
+        pass
+
+
+def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
+    """One thread: the tasks start in the order of their expected cost, the re-runs (one
+    level finer) merged with the blocks, not after them."""
+    plan = make_plan(parse_spec(SPEC))
+    sample = SampleRuns(plan)
+    started = []
+    lock = threading.Lock()
+
+    def record(scene, points, p, settings, index=None, sizes=None, kind=None):
+        with lock:
+            started.append(("rerun" if settings == sample.finer.settings else "block",
+                            tuple(np.asarray(index).tolist())))
+        return None
+
+    monkeypatch.setattr(task, "compute_block", record)
+    todo = list(range(len(plan.blocks)))[::-1]   # any order in: longest first out
+    with ThreadClient(1) as pool:
+        local._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample)
+        while sample.submit_next(pool):   # those left after the last block: the estimate's
+            pass
+        pool.gather(list(sample.futures.values()))
+    cost = {("block", tuple(plan.blocks[b].tolist())): work_s(plan, plan.blocks[b])
+            for b in todo}
+    cost.update({("rerun", (int(i),)): c for i, c in
+                 zip(sample.index[sample.order], sample.costs)})
+    assert sorted(started) == sorted(cost), started
+    costs = [cost[t] for t in started]
+    assert costs == sorted(costs, reverse=True), list(zip(started, costs))
+    kinds = [k for k, _ in started]   # the costliest re-runs first, the cheapest last
+    assert kinds[0] == kinds[-1] == "rerun" and "block" in kinds, kinds
+
+
+def test_a_sweep_priced_below_a_cluster_start_is_small():
+    assert small(make_plan(parse_spec(SPEC)), list(range(8)), 2)
+    big = {**SPEC, "time": {"t_end": 3000.0, "t_transient": 4.0}, "accuracy": "standard"}
+    plan = make_plan(parse_spec(big))
+    assert not small(plan, list(range(len(plan.blocks))), 2)
+
+

@@ -1,0 +1,67 @@
+"""The progress display names each phase of a submit (issue 27): the points, with the error
+estimate's finer re-runs counted ``k/N`` beside them (they run among the blocks, issue 37)
+and on a bar of their own if some are left after the points, then publishing the cube; it
+no longer sits at "99 %" while the estimate runs unmentioned (a 100-point draft Fig. 14 sweep showed 95 % for
+13 s, then 100 % for 6 s more). Checked on the sequence of states the display went
+through (tqdm redraws with a carriage return), not on their timing.
+
+Here a quiet run and the bars' redraw; a submit's phases in order, on threads and on a
+local cluster: tests/e2e/test_progress_phases.py."""
+import re
+
+
+from sweeps.planning.plan import make_plan
+from sweeps.run.phases import shown
+from sweeps.run.submit import submit
+from sweeps.spec import parse_spec
+
+# 8 points in 4 blocks of 2: a few seconds once the kernel is in the disk cache
+SPEC = {"name": "phases", "friction": "lugre", "dither": "square-velocity",
+        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
+        "block_size": 2, "time": {"t_end": 12.0, "t_transient": 4.0},
+        "grid": {"W": [0.0, 0.2, 0.4, 0.6], "omega": [300.0, 1000.0], "v_ref": [0.4],
+                 "v_d": [0.1]}}
+
+
+def _states(err: str, plan) -> list[str]:
+    """The display's states that belong to this sweep, prefix removed, in order."""
+    head = f"{plan.spec.name} [{plan.sweep_id}] "
+    return [s.strip()[len(head):] for s in re.split(r"[\r\n]", err)
+            if s.strip().startswith(head)]
+
+
+def test_a_quiet_submit_shows_nothing(tmp_path, capfd):
+    avg = {"name": "quiet", "method": "averaged", "friction": "lugre",   # in-process, ms
+           "grid": {"W": [0.0, 0.5], "v_ref": [0.1, 0.5]}}
+    plan = make_plan(parse_spec(avg))
+    assert submit(plan, tmp_path / "store", progress=False).state == "done"
+    assert _states(capfd.readouterr().err, plan) == []
+    plan = make_plan(parse_spec({**avg, "grid": {"W": [0.0, 0.4], "v_ref": [0.1, 0.5]}}))
+    assert submit(plan, tmp_path / "store", progress=shown(True)).state == "done"
+    phases = [s.split(":")[0] for s in _states(capfd.readouterr().err, plan)]
+    assert phases[0] == "points" and phases[-1] == "publishing the cube", phases
+
+
+def test_a_bar_left_still_is_redrawn_while_work_goes_on(capfd):
+    """A task can run longer than 10 s (a first compilation, a costly re-run): the loops
+    that wait call ``keep_alive()``, which redraws a bar nothing redrew for REDRAW_S
+    (elapsed time, rate) and leaves a fresh one alone (issue 38)."""
+    from sweeps.run import phases
+
+    plan = make_plan(parse_spec(SPEC))
+    bar = phases.bar(plan, "points", plan.n_points, "point", True)
+    capfd.readouterr()
+    bar.keep_alive()
+    assert capfd.readouterr().err == ""   # drawn just now
+    bar.last_print_t -= phases.REDRAW_S + 1
+    bar.keep_alive()
+    assert _states(capfd.readouterr().err, plan)[-1].startswith("points:")
+    timer = phases.starting(plan, 2, True)
+    timer()
+    timer._bar.last_print_t -= phases.REDRAW_S + 1
+    timer()
+    timer.close()
+    states = _states(capfd.readouterr().err, plan)
+    assert len(states) >= 2 and all(s.startswith("starting a local cluster of 2 workers: ")
+                                    for s in states), states
+    bar.close()
