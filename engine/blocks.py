@@ -19,7 +19,6 @@ from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
 
 POINT_AXES = P.POINT_AXES   # the columns of ``points``
-DEVICES = ("cpu", "cuda")   # where run_block integrates (engine.gpu: one GPU thread a point)
 
 
 @dataclass
@@ -46,8 +45,7 @@ def _check(scene: Scene, points: np.ndarray, p: np.ndarray) -> None:
     scene.check_params(p)
 
 
-def run_block(scene: Scene, points, p, settings: Settings | None = None,
-              device: str = "cpu") -> BlockResult:
+def run_block(scene: Scene, points, p, settings: Settings | None = None) -> BlockResult:
     """Integrate every point of ``points`` (``(n, 4)``: W, omega, v_ref, vd) for ``scene``.
 
     Parameters
@@ -56,23 +54,21 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None,
         of ``engine.integrators.METHODS``) or ``"averaged"`` / ``"hbm"`` (engine.analysis).
     points : float64 ``(n, 4)``; column j overrides ``p[W]``, ``p[OMEGA]``, ``p[V_REF]``, ``p[VD]``.
     p : the parameter vector (``engine.params.pack``), shape ``(N_PARAMS,)``.
-    settings : run-time numerics (defaults: ``Settings()``).
-    device : ``"cpu"`` (this process's thread) or ``"cuda"`` (the GPU, one thread a point,
-        :mod:`engine.gpu`; its :class:`~engine.gpu.NoGPU` says when there is none). The
-        analysis paths have no time integration and run on the CPU whatever ``device`` says.
+    settings : run-time numerics (defaults: ``Settings()``); ``settings.device``
+        ``"cuda"`` integrates on the GPU, one thread a point (:mod:`engine.gpu`; its
+        :class:`~engine.gpu.NoGPU` says when there is none). The analysis paths have no
+        time integration and run on the CPU whatever the device.
     """
     points = np.ascontiguousarray(points, dtype=np.float64)
     p = np.ascontiguousarray(p, dtype=np.float64)
     _check(scene, points, p)
-    if device not in DEVICES:
-        raise ValueError(f"device: expected one of {DEVICES}, got {device!r}")
     if scene.path in ANALYSIS_PATHS:
         return _analysis(scene, points, p)
     settings = settings or Settings()
     m = points.shape[0]
     pk = point_kernel(scene)
     names = pk.names
-    if device == "cuda":
+    if settings.device == "cuda":
         from . import gpu
 
         out, status, counters, wall = gpu.run(scene, points, p, make_config(settings))

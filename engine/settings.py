@@ -4,6 +4,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 ATOL_UNITS = ("absolute", "natural")
+DEVICES = ("cpu", "cuda")   # where a block is integrated (engine.blocks.run_block)
 
 
 @dataclass(frozen=True)
@@ -28,6 +29,9 @@ class Settings:
         Fixed-step methods without dither: the step (time units).
     max_steps
         Budget of accepted + rejected steps per point; past it the point is FAILED.
+    device
+        ``"cpu"`` (the calling thread) or ``"cuda"`` (an NVIDIA GPU, one thread a point:
+        engine.gpu; numbers agree with the CPU's within the tolerances, not bit for bit).
     """
 
     rtol: float = 1e-6
@@ -36,10 +40,13 @@ class Settings:
     steps_per_period: int = 8
     h: float = 1e-3
     max_steps: int = 50_000_000
+    device: str = "cpu"
 
     def __post_init__(self):
         if self.atol_units not in ATOL_UNITS:
             raise ValueError(f"atol_units: {self.atol_units!r} is not one of {ATOL_UNITS}")
+        if self.device not in DEVICES:
+            raise ValueError(f"device: expected one of {DEVICES}, got {self.device!r}")
 
     def as_dict(self) -> dict:
         return asdict(self)

@@ -9,7 +9,7 @@ One run prints, with the CPU model, its core count and the GPU's name:
 1. the anchors' scene (``../shared/anchors/README.md``: LuGre slider, square-velocity dither
    W in [0, 0.8), omega = 1000, v_ref = 0.4, tau in [0, 100], fixed-step RK4 with 2 steps a
    half-period aligned to the switches) through ``engine.blocks.run_block``: points/s on the
-   GPU (``device="cuda"``, one thread a point, engine/gpu.py) and on every CPU core (one
+   GPU (``Settings.device = "cuda"``, one thread a point, engine/gpu.py) and on every CPU core (one
    thread per core, each running the CPU block kernel on its share: the kernels release the
    GIL), their ratio, and the hand kernel ``../shared/anchors/anchor_cuda.py`` (constants
    compiled in) at the same point count as the limit;
@@ -26,6 +26,7 @@ its rate is points/s over all cores.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -123,7 +124,7 @@ def on_cpu(scene, p, points, settings, threads: int):
 def on_gpu(scene, p, points, settings):
     from engine.blocks import run_block
 
-    return run_block(scene, points, p, settings, device="cuda").outputs
+    return run_block(scene, points, p, dataclasses.replace(settings, device="cuda")).outputs
 
 
 def agreement(cpu: dict, gpu: dict, k: int) -> dict:

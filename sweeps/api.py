@@ -12,14 +12,15 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from .errors import InferredPointsWarning
+from .errors import InferredPointsWarning, RefusedError
 from .lookup import inferred_note, read_notes, read_sweep, store_root
 from .spec.load import DEFAULT_MAX_POINTS, Spec, load_spec
 
 
 def run_sweep(spec, store: str | Path | None = None, *, client=None,
               scheduler: str | None = None, workers: int = 2, progress: bool = True,
-              max_points: int = DEFAULT_MAX_POINTS, dashboard: str | None = None):
+              max_points: int = DEFAULT_MAX_POINTS, dashboard: str | None = None,
+              device: str | None = None):
     """Validate, plan and run a sweep; resume it if partial, return at once if complete.
 
     Parameters
@@ -32,6 +33,10 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
         An existing ``dask.distributed.Client`` to compute on (it is left open). Else
         ``scheduler`` (an address), else a LocalCluster of ``workers`` processes
         (``dashboard``: its dashboard address, none by default).
+    device
+        ``"cuda"``: the points on this machine's NVIDIA GPU, one thread a point
+        (docs/GPU.md; a :class:`sweeps.RefusedError` without one); default: the spec's
+        ``device`` (``"cpu"``). A GPU sweep has its own sweep id.
 
     Returns
     -------
@@ -48,6 +53,10 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
     _refuse_in_spawned_import()
     if not isinstance(spec, Spec):
         spec = load_spec(spec, max_points=max_points)
+    if device is not None and device != spec.device:
+        if device not in ("cpu", "cuda"):
+            raise RefusedError(f"device: expected 'cpu' or 'cuda', got {device!r}")
+        spec = spec.model_copy(update={"device": device})
     plan, root = make_plan(spec), store_root(store)
     compute = Compute.chosen(workers=workers, scheduler=scheduler, client=client,
                              dashboard=dashboard)

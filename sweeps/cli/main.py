@@ -63,6 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-points", type=int, default=DEFAULT_MAX_POINTS, help="point budget")
     p.add_argument("--detach", action="store_true",
                    help="queue the sweep for `ditherlab serve` and return its id at once")
+    _device_option(p)
     p.set_defaults(func=cmd_submit)
 
     p = sub.add_parser("serve", parents=[common],
@@ -110,10 +111,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--record", action="store_true",
                    help="remember the estimates in the store, so that the next plan says how "
                    "far off they were (plan writes nothing otherwise)")
+    _device_option(p)
     p.set_defaults(func=cmd_plan)
     add_gallery_commands(sub, common)   # scenes, gallery, --scene (cli.gallery_commands)
     add_web_commands(sub, common)     # web, serve --web (cli.web_commands)
     return ap
+
+
+def _device_option(p) -> None:
+    p.add_argument("--device", choices=("cpu", "cuda"),
+                   help="where the points are integrated (default: the spec's device, cpu): "
+                   "cuda = this machine's NVIDIA GPU, one thread a point (docs/GPU.md); "
+                   "another sweep id than the CPU's")
 
 
 def _cluster_options(p) -> None:

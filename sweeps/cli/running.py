@@ -10,10 +10,14 @@ from ..lookup import catalogue, resolve_sweep, store_root
 
 
 def _load(args):
-    """The spec of a ``submit``/``plan`` command (pydantic is imported here, not at start)."""
+    """The spec of a ``submit``/``plan`` command (pydantic is imported here, not at start);
+    ``--device`` overrides the spec's ``device``."""
     from ..spec.load import load_spec
 
-    return load_spec(args.spec, max_points=args.max_points)
+    spec = load_spec(args.spec, max_points=args.max_points)
+    if getattr(args, "device", None) and args.device != spec.device:
+        spec = spec.model_copy(update={"device": args.device})
+    return spec
 
 
 def cmd_submit(args) -> int:
@@ -30,7 +34,11 @@ def cmd_submit(args) -> int:
     root = store_root(args.store)
     if not args.quiet:
         print(f"sweep {plan.sweep_id} '{spec.name}': {plan.n_points} points in "
-              f"{len(plan.blocks)} blocks, path={plan.path}", file=sys.stderr)
+              f"{len(plan.blocks)} blocks, path={plan.path}"
+              + (", on the GPU" if plan.numerics.settings.device == "cuda" else ""),
+              file=sys.stderr)
+    if plan.device_note:
+        print(f"ditherlab: {plan.device_note}", file=sys.stderr)
     if args.detach:
         return _submit_detached(plan, root)
     try:
@@ -169,6 +177,8 @@ def cmd_plan(args) -> int:
                  if plan.scene.dither == "square-velocity" else "")
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
               f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
+    if spec.device == "cuda":
+        print(f"device     {plan.device_note or 'cuda: one GPU thread a point'}")
     print(f"outputs    {', '.join(plan.outputs)}")
     workers, start = _plan_workers(args, plan)
     print(f"estimates  (calibrated now on this machine, {workers} workers, compute "

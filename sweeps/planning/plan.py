@@ -10,7 +10,7 @@ is 0, the dither when W == 0 everywhere) and without every observable not reques
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -52,6 +52,9 @@ MIN_BLOCKS = 8
 # block seconds) get several blocks a task instead (blocks_per_task); the journal keeps
 # blocks, so a resume with any number of workers finds them.
 SUBMITTER_TASKS_PER_S = 100.0
+# Points per block on a GPU (spec device = "cuda"): one thread a point, and a GPU fills with
+# ~10^5 threads (../shared/recipes/gpu.md: 16,384 points ran at 40 % of an H200's rate)
+GPU_BLOCK_POINTS = 131072
 
 
 @dataclass
@@ -67,6 +70,7 @@ class Plan:
     blocks: list[np.ndarray] = field(repr=False)
     refinement: object = field(default=None, repr=False)   # sweeps.planning.refine (refined sweeps)
     sources: np.ndarray | None = field(default=None, repr=False)   # inferred -> computed
+    device_note: str = ""   # why a spec's device = "cuda" runs on the CPU (else empty)
 
     @property
     def coords(self) -> dict[str, np.ndarray]:
@@ -203,13 +207,19 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     p = base_params(spec)
     num = numerics(spec, float(p[P.SIGMA0]), level)
     outputs = resolve_outputs(spec.method, spec.outputs, spec.system)
+    scene = _scene(spec, p, num.integrator, outputs)
+    device_note = gpu_refusal(spec, scene)
+    if spec.device == "cuda" and not device_note:
+        num = replace(num, settings=replace(num.settings, device="cuda"))
     g = spec.grid_facts
     costs = point_costs(spec, g.coords)
     n = math.prod(g.shape)
     lo, hi = BLOCK_POINTS[spec.method]
     per_block = spec.block_size or min(hi, max(lo, math.ceil(n / MIN_BLOCKS)))
     n_blocks = min(n, max(math.ceil(n / per_block), MIN_BLOCKS))
-    if spec.method == "simulate" and not spec.block_size:
+    if num.settings.device == "cuda" and not spec.block_size:
+        n_blocks = math.ceil(n / GPU_BLOCK_POINTS)   # one launch fills the GPU
+    elif spec.method == "simulate" and not spec.block_size:
         # about BLOCK_SECONDS a block, but never fewer than lo points: the price per radian
         # is Fig. 14's at standard, ~70x a draft LuGre point's, and a dask task costs 10-25
         # ms here (scripts/bench_sweep.py, quiet: 1000 draft LuGre points in 409 blocks of
@@ -223,9 +233,19 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
         blocks = balanced_blocks(costs, n_blocks)
     else:
         blocks = interleaved_blocks(n, n_blocks)
-    return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method,
-                scene=_scene(spec, p, num.integrator, outputs), params=p, numerics=num,
-                outputs=outputs, grid=g, blocks=blocks)
+    return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method, scene=scene, params=p,
+                numerics=num, outputs=outputs, grid=g, blocks=blocks, device_note=device_note)
+
+
+def gpu_refusal(spec: Spec, scene: Scene) -> str:
+    """Why a spec asking for ``device = "cuda"`` runs on the CPU all the same (the
+    Rosenbrock solver, the analysis paths: engine.gpu.unsupported), else ``""``."""
+    if spec.device != "cuda":
+        return ""
+    from engine import gpu   # compiles nothing: reads the scene's method
+
+    why = gpu.unsupported(scene)
+    return f"device cuda: {why}: this sweep runs on the CPU" if why else ""
 
 
 def blocks_per_task(threads: int, block_s: float, blocks_left: int,

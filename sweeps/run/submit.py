@@ -99,6 +99,8 @@ class Submission:
 
     def run(self, max_blocks: int | None) -> SubmitResult:
         try:
+            if self.plan.numerics.settings.device == "cuda":
+                self.compute.check_gpu()
             if not self.journal.files():   # nothing journaled: every block is to run
                 self.start_early(every_block(self.plan))
             cube = self.read()
@@ -126,11 +128,12 @@ class Submission:
         return self.finish(max_blocks)
 
     def runs_here(self, todo: list[int]) -> bool:
-        """On threads of this process: the analysis paths (microseconds a point) unless a
-        scheduler is named, and a simulated sweep priced below a local cluster's start (not
-        when the cluster is open already, serve's, nor with a dashboard asked for)."""
-        c = self.compute
-        return (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
+        """On threads of this process: a sweep on the GPU (this machine's: check_gpu), the
+        analysis paths (microseconds a point) unless a scheduler is named, and a simulated
+        sweep priced below a local cluster's start (not when the cluster is open already,
+        serve's, nor with a dashboard asked for)."""
+        c, gpu = self.compute, self.plan.numerics.settings.device == "cuda"
+        return gpu or (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
             c.kind == LOCAL and not c.dashboard and not c.is_open and
             small(self.plan, todo, c.threads))
 

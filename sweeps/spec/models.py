@@ -221,6 +221,7 @@ class Spec(_Strict):
     grid: Grid = Grid()
     block_size: Annotated[int, Field(ge=1, le=MAX_AXIS_POINTS)] | None = None
     refine: bool | Refine = False
+    device: Literal["cpu", "cuda"] = "cpu"   # cuda: the points on a GPU (engine.gpu)
 
     @field_validator("system", "friction")
     @classmethod
@@ -257,14 +258,13 @@ class Spec(_Strict):
         return v
 
     def canonical(self) -> dict:
-        """The result-changing content as plain data (no cosmetic fields).
-
-        A field added later with a default that reproduces the old behaviour is left out
-        at that default, so existing sweeps keep their ids (and resume): ``atol_units``.
-        """
+        """The result-changing content as plain data (no cosmetic fields). A field added
+        later with a default that reproduces the old behaviour is left out at that default,
+        so existing sweeps keep their ids (and resume): ``refine`` (the exhaustive grid),
+        ``device`` (the CPU; a GPU sweep is another sweep), ``atol_units``."""
         data = self.model_dump(mode="json", exclude=set(COSMETIC))
-        if data.get("refine") is False:
-            del data["refine"]   # the exhaustive grid, as before the field existed
+        for key in [k for k, old in (("refine", False), ("device", "cpu")) if data[k] == old]:
+            del data[key]
         acc = data.get("accuracy")
         if isinstance(acc, dict) and acc.get("atol_units") == "absolute":
             del acc["atol_units"]

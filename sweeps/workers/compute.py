@@ -67,6 +67,23 @@ class Compute:
         return {LOCAL: f"local cluster of {self.workers} workers", SCHEDULER: self.scheduler,
                 CLIENT: "the caller's dask client"}[kind]
 
+    def check_gpu(self) -> None:
+        """A sweep on the GPU (spec ``device = "cuda"``) runs its blocks from the submitting
+        process on this machine's GPU: one line (exit 2) when there is none, or when the
+        compute asked for is a cluster."""
+        from engine.gpu import NoGPU, check_device
+
+        from ..errors import RefusedError
+
+        if self.kind != LOCAL:
+            raise RefusedError(f"device cuda: a sweep on the GPU runs on this machine's GPU, "
+                               f"not on {self.where} (dask workers with a GPU resource are not "
+                               f"supported yet); submit it without --scheduler/--cluster")
+        try:
+            check_device()
+        except NoGPU as exc:
+            raise RefusedError(str(exc)) from None
+
     @property
     def threads(self) -> int:
         """Threads of the submitter for a run that starts no cluster: as many as the

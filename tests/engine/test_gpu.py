@@ -7,12 +7,13 @@
   the CPU block kernel bit for bit; on a GPU (its own exp and fused multiply-adds) the
   promise is the accuracy level's (scripts/bench_gpu.py compares there).
 - The scratch a GPU thread allocates (Stepper.shapes) mirrors the CPU's ``alloc()``.
-- No GPU: ``device="cuda"`` is one clear error; the Rosenbrock solver and the analysis paths
+- No GPU: ``Settings(device="cuda")`` is one clear error; the Rosenbrock solver and the analysis paths
   say they stay on the CPU.
 
 The device build's type check (PTX for a Hopper GPU, no GPU needed but the CUDA compiler)
 is scripts/gpu_check.py, run where the ``gpu`` extra is installed.
 """
+import dataclasses
 import json
 import os
 import subprocess
@@ -32,7 +33,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 # one child for every case (numba and the engine imported once): a JSON line per case
 CHILD = """
-import json, sys
+import dataclasses, json, sys
 import numpy as np
 from engine.blocks import run_block
 from tests.engine.gpu_cases import build
@@ -40,7 +41,7 @@ from tests.engine.gpu_cases import build
 for case_id in sys.argv[1:]:
     scene, p, points, settings = build(case_id)
     cpu = run_block(scene, points, p, settings)
-    dev = run_block(scene, points, p, settings, device="cuda")
+    dev = run_block(scene, points, p, dataclasses.replace(settings, device="cuda"))
     print(json.dumps({
         "case": case_id,
         "equal": {k: bool(np.array_equal(cpu.outputs[k], dev.outputs[k], equal_nan=True))
@@ -102,9 +103,9 @@ def test_without_a_gpu_the_cuda_device_is_one_clear_error():
         pytest.skip("this process runs under the CUDA simulator")
     sc, p, points, settings = build("lugre-square-rk4")
     with pytest.raises(gpu.NoGPU, match=r"no CUDA GPU here .* run without --device cuda"):
-        run_block(sc, points, p, settings, device="cuda")
+        run_block(sc, points, p, dataclasses.replace(settings, device="cuda"))
     with pytest.raises(ValueError, match=r"device: expected one of \('cpu', 'cuda'\)"):
-        run_block(sc, points, p, settings, device="gpu")
+        dataclasses.replace(settings, device="gpu")
 
 
 def test_what_stays_on_the_cpu_says_why():

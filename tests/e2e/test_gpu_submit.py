@@ -1,0 +1,91 @@
+"""``ditherlab submit --device cuda`` (issue 36) on a machine without a GPU.
+
+- Without one: one line, exit 2, nothing computed or registered.
+- Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1`` in the command's environment) the
+  whole service path runs the GPU kernel: its own sweep id (a GPU's numbers agree within
+  tolerance, not bit for bit), the device in the cube's engine settings, and, in the simulator,
+  the CPU sweep's numbers exactly (the simulator runs the engine's CPU machine code; on a GPU
+  scripts/bench_gpu.py compares).
+- What stays on the CPU says so; a cluster with ``--device cuda`` is refused in one line.
+"""
+import json
+import os
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from ..helpers import ditherlab
+
+pytestmark = pytest.mark.subprocess
+
+SPEC = """
+name = "gpu-e2e"
+friction = "lugre"
+dither = "square-velocity"
+accuracy = "draft"
+[time]
+t_end = 0.5
+t_transient = 0.1
+[grid]
+W = [0.0, 0.3]
+omega = [200.0, 300.0]
+v_ref = [0.4]
+v_d = [0.1]
+"""
+
+
+@pytest.fixture
+def spec(tmp_path):
+    path = tmp_path / "gpu.toml"
+    path.write_text(SPEC)
+    return path
+
+
+def _no_sim() -> dict:
+    return {k: v for k, v in os.environ.items() if k != "NUMBA_ENABLE_CUDASIM"} | {
+        "MPLBACKEND": "Agg"}
+
+
+def test_without_a_gpu_the_device_is_refused_in_one_line(spec, tmp_path):
+    store = tmp_path / "store"
+    proc = ditherlab("submit", spec, "--device", "cuda", "-q", store=store, env=_no_sim())
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no CUDA GPU here" in lines[0] and "Traceback" not in proc.stderr
+    assert not [p for p in store.glob("*") if p.is_dir()]   # no sweep folder
+    on_cluster = ditherlab("submit", spec, "--device", "cuda", "-q", "--scheduler",
+                           "tcp://127.0.0.1:1", store=store, env=_no_sim())
+    assert on_cluster.returncode == 2 and "not supported yet" in on_cluster.stderr
+
+
+def test_plan_says_what_stays_on_the_cpu(spec, tmp_path):
+    stiff = spec.read_text().replace('accuracy = "draft"',
+                                     'accuracy = { integrator = "rosenbrock", rtol = 1e-6 }')
+    path = tmp_path / "stiff.toml"
+    path.write_text(stiff)
+    proc = ditherlab("plan", path, "--device", "cuda", store=tmp_path / "store", env=_no_sim())
+    assert proc.returncode == 0, proc.stderr
+    assert "device     device cuda: the 'rodas4' integrator runs on the CPU only" in proc.stdout
+    gpu = ditherlab("plan", spec, "--device", "cuda", store=tmp_path / "store", env=_no_sim())
+    cpu = ditherlab("plan", spec, store=tmp_path / "store", env=_no_sim())
+    assert "device     cuda: one GPU thread a point" in gpu.stdout
+    assert gpu.stdout.split()[1] != cpu.stdout.split()[1]   # another sweep id
+
+
+@pytest.mark.long
+def test_a_simulated_gpu_sweep_equals_the_cpu_sweep(spec, tmp_path):
+    store = tmp_path / "store"
+    sim = _no_sim() | {"NUMBA_ENABLE_CUDASIM": "1"}
+    gpu = ditherlab("submit", spec, "--device", "cuda", "-q", store=store, env=sim, check=True)
+    cpu = ditherlab("submit", spec, "-q", store=store, env=_no_sim(), check=True)
+    paths = [line.split("cube: ")[1] for proc in (gpu, cpu) for line in proc.stdout.splitlines()
+             if line.startswith("cube: ")]
+    assert len(paths) == 2 and paths[0] != paths[1]
+    with xr.open_dataset(paths[0]) as g, xr.open_dataset(paths[1]) as c:
+        assert json.loads(g.attrs["engine_settings"])["device"] == "cuda"
+        assert json.loads(c.attrs["engine_settings"])["device"] == "cpu"
+        assert (g["status"] == 0).all()
+        for name in g.data_vars:
+            if name != "cost_s":
+                assert np.array_equal(g[name].values, c[name].values, equal_nan=True), name
