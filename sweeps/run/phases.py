@@ -39,6 +39,9 @@ def _bar_class():
         def keep_alive(self) -> None:
             if not self.disable and time.time() - self.last_print_t >= REDRAW_S:
                 self.refresh()
+                # tqdm's refresh() leaves last_print_t alone: without this, every call after
+                # the first 5 s redrew (a line per wait-loop turn, thousands a minute in a log)
+                self.last_print_t = time.time()
 
     return Bar
 

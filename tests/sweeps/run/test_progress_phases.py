@@ -56,6 +56,9 @@ def test_a_bar_left_still_is_redrawn_while_work_goes_on(capfd):
     bar.last_print_t -= phases.REDRAW_S + 1
     bar.keep_alive()
     assert _states(capfd.readouterr().err, plan)[-1].startswith("points:")
+    for _ in range(100):   # the wait loops call it every few ms: one redraw per REDRAW_S
+        bar.keep_alive()
+    assert capfd.readouterr().err == ""
     timer = phases.starting(plan, 2, True)
     timer()
     timer._bar.last_print_t -= phases.REDRAW_S + 1
