@@ -4,7 +4,7 @@
 
     .venv/bin/pip install -e '.[gpu]'          # numba-cuda with the CUDA compiler (NVVM)
     .venv/bin/python scripts/gpu_check.py     # every case of tests/engine/gpu_cases.py
-    .venv/bin/python scripts/gpu_check.py lugre-square-rk4 gms-servo-square-dopri5
+    .venv/bin/python scripts/gpu_check.py lugre-square-rk4 gms-servo-sine-velocity-dopri5
 
 numba.cuda asks the current device for its compute capability when it compiles a device
 function (``numba.cuda.dispatcher.CUDADispatcher.compile_device``); with no device here a

@@ -2,7 +2,10 @@
 and GPU-capable method at least once, the effect flags off, a vector-parameter law and a
 brought model (docs/examples/mylab). Each case is a few points on a short tau, so the CUDA
 simulator (tests/engine/test_gpu.py) and the PTX compile check (scripts/gpu_check.py) can
-run them all.
+run them all. Compiling a scene's CPU kernels is what a case costs (~20-100 s on 2 cores):
+the two cases with every observable are the engine tests' own scenes (tests.engine.common,
+test_engine_batch_api), the GMS, Dahl and servo cases are test_models_reference's and
+test_models_servo's (one compilation in a CI run for both); the others ask for few outputs.
 """
 from __future__ import annotations
 
@@ -12,10 +15,12 @@ import numpy as np
 
 from engine import Scene, Settings, registry
 from engine.outputs import SIMULATE
+from tests.engine.common import scene as common_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 MYLAB = ROOT / "docs" / "examples" / "mylab"
 ALL = tuple(SIMULATE)
+FEW = ("v_mean", "F_mean")
 GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
 SERVO_OUTS = ("hunt_amplitude", "hunt_period", "steady_error", "stick_fraction")
 SLIDER_POINTS = [[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.05, 0.01]]
@@ -26,27 +31,29 @@ CASES = {
                          SLIDER_POINTS, 0.5),
     "lugre-square-dopri5": ("lugre", "slider", "square-velocity", "dopri5", {}, ALL, {},
                             SLIDER_POINTS, 0.5),
-    "lugre-sine-velocity-dopri5": ("lugre", "slider", "sine-velocity", "dopri5", {}, ALL, {},
+    "lugre-sine-velocity-dopri5": ("lugre", "slider", "sine-velocity", "dopri5", {},
+                                   ("v_slow_p2p", "stick_fraction", "alpha_hist"), {},
                                    SLIDER_POINTS, 0.5),
-    "lugre-sine-force-rk4": ("lugre", "slider", "sine-force", "rk4", {}, ALL, {},
+    "lugre-sine-force-rk4": ("lugre", "slider", "sine-force", "rk4", {}, FEW, {},
                              SLIDER_POINTS, 0.5),
     "lugre-none-dopri5-no-effects": ("lugre", "slider", "none", "dopri5", {},
                                      ("v_mean", "F_mean", "stick_fraction"),
                                      {"sigma1": 0.0, "sigma2": 0.0, "fs": 1.0, "fc": 1.0},
                                      SLIDER_POINTS, 2.0),
     "elastoplastic-square-dopri5": ("elastoplastic", "slider", "square-velocity", "dopri5",
-                                    {}, ALL, {}, SLIDER_POINTS, 0.5),
+                                    {}, ("stick_fraction", "slip_fraction", "max_stick"), {},
+                                    SLIDER_POINTS, 0.5),
     "stribeck-sine-velocity-dopri5": ("stribeck", "slider", "sine-velocity", "dopri5", {},
-                                      ("v_mean", "F_mean", "stick_fraction"), {},
-                                      SLIDER_POINTS, 0.5),
+                                      FEW, {}, SLIDER_POINTS, 0.5),
     "coulomb-square-rk4": ("coulomb", "slider", "square-velocity", "rk4", {},
-                           ("v_mean", "F_mean", "stick_fraction"), {}, SLIDER_POINTS, 0.5),
+                           ("v_mean", "stick_fraction"), {}, SLIDER_POINTS, 0.5),
     "dahl-sine-velocity-dopri5": ("dahl", "slider", "sine-velocity", "dopri5", {},
                                   ("v_mean", "F_mean"), {"sigma1": 0.0}, SLIDER_POINTS, 0.5),
     "gms-sine-velocity-dopri5": ("gms", "slider", "sine-velocity", "dopri5", GMS,
                                  ("v_mean", "F_mean"), {"sigma1": 0.0}, SLIDER_POINTS, 0.5),
-    "gms-servo-square-dopri5": ("gms", "servo", "square-velocity", "dopri5", GMS, SERVO_OUTS,
-                                {}, [[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.4, 0.1]], 2.0),
+    "gms-servo-sine-velocity-dopri5": ("gms", "servo", "sine-velocity", "dopri5", GMS,
+                                       SERVO_OUTS, {},
+                                       [[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.4, 0.1]], 2.0),
     "lugre-contact-sine-velocity-dopri5": ("lugre", "contact", "sine-velocity", "dopri5", {},
                                            ("v_mean", "F_mean"), {},
                                            [[0.001, 100.0, 0.001, 0.001],
@@ -57,11 +64,17 @@ CASES = {
 }
 
 
+SHARED = {"lugre-square-rk4": {"integrator": "rk4"}, "lugre-square-dopri5": {}}
+
+
 def build(case_id: str):
     """``(scene, p, points, settings)`` of one case (standard-level tolerances)."""
     friction, system, dither, integrator, own, outputs, shared, points, t_end = CASES[case_id]
     p = registry.pack(friction, system, own, t_end=t_end, t_transient=0.2 * t_end, **shared)
-    scene = Scene.from_params(p, system=system, friction=friction, dither=dither,
-                              integrator=integrator, outputs=outputs,
-                              sizes=registry.sizes_of(friction, system, own))
+    if case_id in SHARED:   # the engine tests' scene (its kernels compiled once for both)
+        scene = common_scene(**SHARED[case_id])
+    else:
+        scene = Scene.from_params(p, system=system, friction=friction, dither=dither,
+                                  integrator=integrator, outputs=outputs,
+                                  sizes=registry.sizes_of(friction, system, own))
     return scene, p, np.array(points, dtype=np.float64), Settings(rtol=1e-6, atol=1e-9)
