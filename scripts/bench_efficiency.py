@@ -36,6 +36,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from machine import cores, cpu_model
+
 ROOT = Path(__file__).resolve().parents[1]
 
 CHEAP = {"name": "cheap", "friction": "lugre", "dither": "none", "method": "simulate",
@@ -110,25 +112,6 @@ print(json.dumps({"state": res.state, "timings": res.timings, "submit_s": t2 - t
                   "blocks": len(plan.blocks), "still_s": max(np.diff(times), default=0.0),
                   "point_cost_s": float(np.nansum(cube["cost_s"].values))}))
 """
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    import platform
-
-    return platform.processor() or platform.machine()
-
-
-def cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:
-        return os.cpu_count() or 1
 
 
 def one(spec, workers: int, cold: bool, tree: Path = ROOT) -> dict:

@@ -35,20 +35,11 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import store   # noqa: E402
+from machine import cpu_model  # noqa: E402
 import sweeps  # noqa: E402
 
 # the benchmark compares classes, which inferred points settle; their values are not read
 warnings.simplefilter("ignore", sweeps.InferredPointsWarning)
-
-
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def fig14(n: int, refine: bool) -> dict:

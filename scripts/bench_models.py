@@ -19,7 +19,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "docs" / "examples")]
 
 from engine import Scene, Settings, registry  # noqa: E402
 from engine.blocks import run_block  # noqa: E402
-from bench_maps import cpu_model  # noqa: E402  (/proc/cpuinfo's model name)
+from machine import cpu_model  # noqa: E402  (/proc/cpuinfo's model name)
 
 GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
 
