@@ -6,12 +6,18 @@ clients run many), the exception is printed as "Exception ignored in ..." and dr
 and a submitter runs on as if nobody had pressed Ctrl-C (seen under load in
 tests/e2e/test_service.py's Ctrl-C test). :func:`remembered` installs a SIGINT handler
 that notes the signal before raising; the dispatch loop calls :func:`check` every tick,
-which raises it again if it was swallowed. Installed only over Python's default handler
-(``serve`` has its own: the first SIGINT stops gracefully, sweeps.service).
+which raises it again if it was swallowed. Python reports a swallowed exception through
+``sys.unraisablehook`` as "Exception ignored in ... Traceback ... KeyboardInterrupt" on
+stderr, which the user would read as a crash beside the one line the interrupt ends with
+(seen under load in tests/e2e/test_faults.py's Ctrl-C test): while inside, such a
+KeyboardInterrupt is not printed (:func:`check` raises it); any other unraisable exception
+is reported as before. Installed only over Python's default handler (``serve`` has its
+own: the first SIGINT stops gracefully, sweeps.service).
 """
 from __future__ import annotations
 
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -32,10 +38,18 @@ def remembered():
         return
     _pressed.clear()
     previous = signal.signal(signal.SIGINT, _note_and_raise)
+    report = sys.unraisablehook
+
+    def unraisable(info) -> None:
+        if not (issubclass(info.exc_type, KeyboardInterrupt) and _pressed.is_set()):
+            report(info)
+
+    sys.unraisablehook = unraisable
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = report
         _pressed.clear()
 
 

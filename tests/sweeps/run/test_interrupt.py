@@ -57,6 +57,33 @@ def test_a_swallowed_ctrl_c_is_raised_at_the_next_check(monkeypatch, terminal):
         interrupt.check()   # raised once, not again
 
 
+class _FailsInDel:
+    def __del__(self):
+        raise ValueError("a real fault in a finalizer")
+
+
+def test_a_swallowed_ctrl_c_prints_no_traceback_but_other_faults_still_do(monkeypatch,
+                                                                         terminal):
+    """Python reports a swallowed exception through ``sys.unraisablehook`` ("Exception
+    ignored in ... Traceback"): after a Ctrl-C in a dask weakref callback the user read a
+    traceback above the interrupt's one line (tests/e2e/test_faults.py, under load). The
+    guard drops that report for the KeyboardInterrupt it will raise again, and only for it."""
+    reported = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: reported.append(u.exc_type))
+    with interrupt.remembered():
+        obj = _SignalledInDel()
+        del obj
+        assert reported == []
+        with pytest.raises(KeyboardInterrupt):
+            interrupt.check()
+        obj = _FailsInDel()
+        del obj
+        assert reported == [ValueError]
+    obj = _SignalledInDel()   # outside the guard: reported, as before
+    del obj
+    assert reported == [ValueError, KeyboardInterrupt]
+
+
 def test_without_the_guard_the_ctrl_c_is_lost(monkeypatch, terminal):
     assert _swallow_a_ctrl_c(monkeypatch) == [KeyboardInterrupt]
     interrupt.check()   # nothing remembered: this is the defect the guard closes
