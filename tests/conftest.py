@@ -9,10 +9,16 @@
   wrong-model checks, the promise check over every shipped spec). Deselected when ``-m``
   is not given, so ``scripts/test`` stays a few minutes; any ``-m`` expression chooses for
   itself (``-m long``: the long set; ``-m slurm``: the Slurm tests, all long).
-  ``.ci/run`` runs ``scripts/test`` and then ``scripts/test -m long``: CI runs every one.
+  ``.ci/run`` runs ``scripts/test -m "long or not long"``: CI runs every one.
 - ``slow``: the studies (the full hard-case suite, the fault campaign): skipped with the
   command that runs them (``scripts/test -m slow tests/hard``) unless ``-m`` names them;
   CI does not run them.
+
+Order: ``scripts/test`` runs the tests on one pytest-xdist worker per core, a module's tests
+on one worker (``--dist loadscope``), handing out modules in collection order. The costliest
+modules (:data:`COSTLIEST`) and then those with a long test are collected first, so that a
+worker never starts a 6-minute module when the rest of the suite is done (the longest-first
+rule of scheduling).
 """
 from __future__ import annotations
 
@@ -26,6 +32,20 @@ from .guarantee import skip_unless_ci
 
 HERE = pathlib.Path(__file__).parent
 
+# the modules that cost most, costliest first (.ci/run's --durations on a fresh clone, this
+# 2-core machine, cold kernel cache): the promise check 357 s, the gallery's figures 118 s,
+# batch-started workers 76 s, two processes filling one kernel cache 48 s, the README 47 s
+COSTLIEST = ("accuracy/test_promises.py", "e2e/test_gallery_figures.py", "e2e/test_hpc.py",
+             "engine/test_disk_cache.py", "test_readme.py")
+
+
+def _cost_rank(item) -> tuple[int, int]:
+    where = pathlib.Path(str(item.fspath)).relative_to(HERE).as_posix()
+    if where in COSTLIEST:
+        return 0, COSTLIEST.index(where)
+    return 1, 0
+
+
 
 def pytest_collection_modifyitems(config, items):
     markexpr = config.getoption("markexpr") or ""
@@ -34,6 +54,8 @@ def pytest_collection_modifyitems(config, items):
         if long:
             config.hook.pytest_deselected(items=long)
             items[:] = [item for item in items if not item.get_closest_marker("long")]
+    long_modules = {item.fspath for item in items if item.get_closest_marker("long")}
+    items.sort(key=lambda item: (*_cost_rank(item), item.fspath not in long_modules))
     if "slow" in markexpr:
         return
     for item in items:
