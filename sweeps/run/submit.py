@@ -77,8 +77,9 @@ class Submission:
     :meth:`register` the sweep, :meth:`take_lease`, :meth:`prepare` the cube under it,
     :meth:`compute_blocks` (:meth:`connect` to the cluster first), :meth:`publish`,
     :meth:`finish`. A cluster to be started starts as early as its need is known
-    (:meth:`start_early`): for a sweep with nothing journaled yet, before the store is
-    read. ``timings`` (phase -> seconds) goes to ``SubmitResult.timings``."""
+    (:meth:`start_early`): before the store is read, for the blocks without a journal
+    file (every block of a new sweep, the missing ones of a resumed sweep). ``timings``
+    (phase -> seconds) goes to ``SubmitResult.timings``."""
 
     def __init__(self, plan: Plan, store_root, compute: Compute, *, progress,
                  owner: str | None, stop):
@@ -101,8 +102,9 @@ class Submission:
         try:
             if self.plan.numerics.settings.device == "cuda":
                 self.compute.check_gpu()
-            if not self.journal.files():   # nothing journaled: every block is to run
-                self.start_early(every_block(self.plan))
+            unjournaled = self.unjournaled()
+            if unjournaled != []:   # (all journaled: failed points, the estimate: after the read)
+                self.start_early(unjournaled)
             cube = self.read()
             if self.complete(cube):
                 return self.result(cube, blocks_run=0)
@@ -136,6 +138,19 @@ class Submission:
         return gpu or (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
             c.kind == LOCAL and not c.dashboard and not c.is_open and
             small(self.plan, todo, c.threads))
+
+    def unjournaled(self) -> list[int] | None:
+        """The blocks known to be still to run before the store is read: those without a
+        journal file (a resumed sweep; its journaled blocks' points are checked by
+        :meth:`read`), every block of a sweep with nothing journaled (None for a refined
+        sweep, whose first level is not known yet). Reading the names of the journal's
+        files costs a directory listing, not a read of the blocks."""
+        files = self.journal.files()
+        if not files:
+            return every_block(self.plan)
+        if self.plan.spec.refine:
+            return []   # resumed level by level (sweeps.run.refined): known after the read
+        return [b for b in range(len(self.plan.blocks)) if b not in files]
 
     def start_early(self, todo: list[int] | None) -> None:
         """Start the cluster of our own a simulated run of ``todo`` (None: not known yet, a

@@ -10,6 +10,7 @@ from __future__ import annotations
 import threading
 
 import numpy as np
+import pytest
 
 from sweeps.estimates.error_reruns import SampleRuns
 from sweeps.planning.plan import make_plan, work_s
@@ -92,3 +93,49 @@ def test_a_sweep_priced_below_a_cluster_start_is_small():
     assert not small(plan, list(range(len(plan.blocks))), 2)
 
 
+
+
+class _Stop(Exception):
+    pass
+
+
+def _early_starts(plan, store, monkeypatch) -> list:
+    """What a submit of ``plan`` does before it reads the store: ``[("start", n_blocks)]``
+    for each cluster start asked for, then ``"read"`` (the run is stopped there). The plan
+    is priced as needing a cluster; nothing is started."""
+    from sweeps.run import submit as submitting
+    from sweeps.workers.compute import Compute
+
+    seen = []
+    monkeypatch.setattr(submitting, "small", lambda *a: False)
+    monkeypatch.setattr(Compute, "start_early", lambda self, n, warm: seen.append(("start", n)))
+
+    def read(self):
+        seen.append("read")
+        raise _Stop
+
+    monkeypatch.setattr(submitting.Submission, "read", read)
+    with pytest.raises(_Stop):
+        submitting.submit(plan, store)
+    return seen
+
+
+def test_the_cluster_starts_before_the_store_is_read_for_a_new_and_a_resumed_sweep(
+        tmp_path, monkeypatch):
+    """Issue 37: the start overlaps reading the journal, also when a run resumes: for the
+    blocks without a journal file; a sweep whose blocks are all journaled reads first
+    (whether it needs a cluster, for failed points or the error estimate, is known then)."""
+    from sweeps.run.submit import submit
+    from sweeps.workers.compute import Compute
+
+    plan = make_plan(parse_spec(SPEC))
+    store = tmp_path / "store"
+    n = len(plan.blocks)
+    with monkeypatch.context() as m:
+        assert _early_starts(plan, store, m) == [("start", n), "read"]
+    submit(plan, store, Compute(workers=1), max_blocks=3)   # small: on a thread here
+    with monkeypatch.context() as m:
+        assert _early_starts(plan, store, m) == [("start", n - 3), "read"]
+    submit(plan, store, Compute(workers=1))
+    with monkeypatch.context() as m:
+        assert _early_starts(plan, store, m) == ["read"]
