@@ -53,25 +53,35 @@ def check(specs: dict[str, dict], levels=LEVELS, store=None, workers=2, log=prin
     estimate being the cube's ``error_estimate`` (None: nothing to estimate) with, where
     the next finer level ran too, ``grid_change`` and ``grid_warnings``: every point of the
     grid compared with that level's cube (:func:`grid_compare`)."""
-    from sweeps.api import InferredPointsWarning, open_sweep, run_sweep
+    from sweeps.workers.cluster import dask_client
 
     store = store or tempfile.mkdtemp(prefix="promise-")
     rows = []
-    for name, spec in specs.items():
-        cubes = {}
-        for level in levels:
-            spec_l = {**spec, "accuracy": level, "name": f"{spec.get('name', name)}-{level}"}
-            res = run_sweep(spec_l, store, workers=workers, progress=False)
-            with warnings.catch_warnings():   # a refined sweep's inferred points: compared
-                warnings.simplefilter("ignore", InferredPointsWarning)   # only where computed
-                ds = cubes[level] = open_sweep(res.sweep_id, store)
-            est = json.loads(ds.attrs["error_estimate"]) if "error_estimate" in ds.attrs else None
-            rows.append((name, level, est))
-        for (_, level, est), finer in zip(rows[-len(levels):], levels[1:]):
-            if est is not None and LEVELS.index(finer) == LEVELS.index(level) + 1:
-                est.update(grid_compare(spec, level, cubes[level], finer, cubes[finer]))
-        for row in rows[-len(levels):]:
-            log(_line(*row))
+    with dask_client(workers=workers) as client:   # one cluster for every run
+        for name, spec in specs.items():
+            rows += _check_spec(name, spec, levels, store, client, log)
+    return rows
+
+
+def _check_spec(name: str, spec: dict, levels, store, client, log) -> list:
+    """One spec at every level on ``client``: its rows, each level's estimate compared over
+    the whole grid with the next finer level's cube."""
+    from sweeps.api import InferredPointsWarning, open_sweep, run_sweep
+
+    rows, cubes = [], {}
+    for level in levels:
+        spec_l = {**spec, "accuracy": level, "name": f"{spec.get('name', name)}-{level}"}
+        res = run_sweep(spec_l, store, client=client, progress=False)
+        with warnings.catch_warnings():   # a refined sweep's inferred points: compared
+            warnings.simplefilter("ignore", InferredPointsWarning)   # only where computed
+            ds = cubes[level] = open_sweep(res.sweep_id, store)
+        est = json.loads(ds.attrs["error_estimate"]) if "error_estimate" in ds.attrs else None
+        rows.append((name, level, est))
+    for (_, level, est), finer in zip(rows, levels[1:]):
+        if est is not None and LEVELS.index(finer) == LEVELS.index(level) + 1:
+            est.update(grid_compare(spec, level, cubes[level], finer, cubes[finer]))
+    for row in rows:
+        log(_line(*row))
     return rows
 
 
