@@ -88,8 +88,7 @@ def test_kernels_cached_by_different_processes_do_not_collide(tmp_path):
     code for both (found: a block kernel returned another scene's output columns). Each
     closure's name now carries its UUID (engine/jit.py)."""
     a, b = "v_mean,F_mean", "F_mean,v_mean"
-    fresh = {**run_pair(tmp_path / "a", a), **run_pair(tmp_path / "b", b)}
-    run_pair(tmp_path / "shared", a)             # process 1 caches a
-    run_pair(tmp_path / "shared", b)             # process 2 caches b
-    loaded = run_pair(tmp_path / "shared", a, b)  # process 3 loads both
+    fresh = {**run_pair(tmp_path, a),     # process 1 compiles a (the cache is empty) and caches it
+             **run_pair(tmp_path, b)}     # process 2 compiles b (another closure) and caches it
+    loaded = run_pair(tmp_path, a, b)     # process 3 loads both
     assert loaded == fresh
