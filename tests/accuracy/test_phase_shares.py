@@ -83,6 +83,7 @@ def test_undithered_shares_meet_every_level(level):
     assert math.isclose(out["alpha_hist"].sum(), 1.0, abs_tol=1e-12)
 
 
+@pytest.mark.long   # 17-30 s of first compilations (2 cores): quick set <= 3 min, issue 38
 def test_near_slip_is_well_conditioned_at_loose_tolerance():
     """near_slip (alpha >= 0.9) converges where slip (alpha == 1) cannot: DP5 at rtol 1e-5."""
     from engine.settings import Settings
@@ -108,6 +109,7 @@ def test_sine_dither_shares_meet_standard():
                                                                            "alpha_hist")
 
 
+@pytest.mark.long   # 17-30 s of first compilations (2 cores): quick set <= 3 min, issue 38
 def test_zero_dither_row_does_not_depend_on_omega():
     """specs/fig14.toml's W = 0 row had slip_fraction 0.100-0.106 across omega, where omega
     means nothing; now the row agrees to the standard promise."""

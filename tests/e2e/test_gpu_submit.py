@@ -59,6 +59,7 @@ def test_without_a_gpu_the_device_is_refused_in_one_line(spec, tmp_path):
     assert on_cluster.returncode == 2 and "not supported yet" in on_cluster.stderr
 
 
+@pytest.mark.long   # 17-30 s of first compilations (2 cores): quick set <= 3 min, issue 38
 def test_plan_says_what_stays_on_the_cpu(spec, tmp_path):
     stiff = spec.read_text().replace('accuracy = "draft"',
                                      'accuracy = { integrator = "rosenbrock", rtol = 1e-6 }')

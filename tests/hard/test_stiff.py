@@ -15,6 +15,7 @@ from engine.scene import Scene
 from .hardcases import REFS, error_units, run, settings_for
 
 
+@pytest.mark.long   # 17-30 s of first compilations (2 cores): quick set <= 3 min, issue 38
 def test_steps_exactly_onto_every_switch():
     """DESIGN.md §1: the square-wave switches k pi / omega are step ends, bit for bit."""
     c = {**REFS["sigma0_1e6"]["params"], "t_end": 0.05}
