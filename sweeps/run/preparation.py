@@ -1,5 +1,6 @@
 """What a run starts from, read before and under the sweep's lease (sweeps.run.submit):
-the blocks still to run, from the cube rebuilt from the journal (:func:`blocks_to_run`), the
+the blocks still to run, from the cube rebuilt from the journal (:func:`blocks_to_run`; before
+that, those without a journal file: :func:`blocks_unjournaled`), the
 room they need on disk (:func:`check_space`), a published cube equal to the journal
 (:func:`republish`), and the lease itself, or the final row of the run this process
 attached to (:func:`take_lease`); whether the error estimate's re-runs go among the blocks
@@ -37,6 +38,21 @@ def every_block(plan: Plan) -> list[int] | None:
     """The blocks of a sweep with nothing journaled (None for a refined sweep: its first
     level is not known before its replay)."""
     return None if plan.spec.refine else list(range(len(plan.blocks)))
+
+
+def blocks_unjournaled(plan: Plan, journal) -> list[int] | None:
+    """The blocks known to be still to run before the store is read (a cluster's start
+    overlaps the read: sweeps.run.submit): those without a journal file (a resumed sweep;
+    its journaled blocks' points are checked by the read), every block of a sweep with
+    nothing journaled (None for a refined sweep, whose first level is not known yet; [] for
+    a resumed one, which resumes level by level: sweeps.run.refined). The names of the
+    journal's files cost a directory listing, not a read of the blocks."""
+    files = journal.files()
+    if not files:
+        return every_block(plan)
+    if plan.spec.refine:
+        return []
+    return [b for b in range(len(plan.blocks)) if b not in files]
 
 
 def checked_blocks(plan: Plan):

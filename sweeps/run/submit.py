@@ -33,7 +33,7 @@ from .dispatch import run_blocks
 from .local import run_blocks_local
 from .lease_holder import LEASE_LOST
 from .outcome import SubmitResult, abort, attached_result, final_result
-from .preparation import (blocks_to_run, check_space, checked_blocks, every_block,
+from .preparation import (blocks_to_run, blocks_unjournaled, check_space, checked_blocks,
                           overlaps_estimate, republish, take_lease)
 from ..planning.plan import Plan, work_s
 from .quiet import display_of
@@ -76,10 +76,9 @@ class Submission:
     """One :func:`submit`, in named steps: :meth:`read` what earlier runs finished,
     :meth:`register` the sweep, :meth:`take_lease`, :meth:`prepare` the cube under it,
     :meth:`compute_blocks` (:meth:`connect` to the cluster first), :meth:`publish`,
-    :meth:`finish`. A cluster to be started starts as early as its need is known
-    (:meth:`start_early`): before the store is read, for the blocks without a journal
-    file (every block of a new sweep, the missing ones of a resumed sweep). ``timings``
-    (phase -> seconds) goes to ``SubmitResult.timings``."""
+    :meth:`finish`. A cluster to be started starts before the store is read, for the
+    blocks without a journal file (:meth:`start_early`). ``timings`` (phase -> seconds)
+    goes to ``SubmitResult.timings``."""
 
     def __init__(self, plan: Plan, store_root, compute: Compute, *, progress,
                  owner: str | None, stop):
@@ -102,7 +101,7 @@ class Submission:
         try:
             if self.plan.numerics.settings.device == "cuda":
                 self.compute.check_gpu()
-            unjournaled = self.unjournaled()
+            unjournaled = blocks_unjournaled(self.plan, self.journal)
             if unjournaled != []:   # (all journaled: failed points, the estimate: after the read)
                 self.start_early(unjournaled)
             cube = self.read()
@@ -139,31 +138,18 @@ class Submission:
             c.kind == LOCAL and not c.dashboard and not c.is_open and
             small(self.plan, todo, c.threads))
 
-    def unjournaled(self) -> list[int] | None:
-        """The blocks known to be still to run before the store is read: those without a
-        journal file (a resumed sweep; its journaled blocks' points are checked by
-        :meth:`read`), every block of a sweep with nothing journaled (None for a refined
-        sweep, whose first level is not known yet). Reading the names of the journal's
-        files costs a directory listing, not a read of the blocks."""
-        files = self.journal.files()
-        if not files:
-            return every_block(self.plan)
-        if self.plan.spec.refine:
-            return []   # resumed level by level (sweeps.run.refined): known after the read
-        return [b for b in range(len(self.plan.blocks)) if b not in files]
-
     def start_early(self, todo: list[int] | None) -> None:
         """Start the cluster of our own a simulated run of ``todo`` (None: not known yet, a
-        refined sweep's first level) will need, and compile
-        its kernel there, on a thread while this process reads the store and prepares the
-        cube (issue 37; sweeps.workers.cluster.EarlyStart); nothing if it runs on threads
-        here, if the cluster is open (serve's) or not ours (a scheduler, a client)."""
+        refined sweep's first level) will need, and compile its kernel there, on a thread
+        while this process reads the store and prepares the cube (issue 37;
+        sweeps.workers.cluster.EarlyStart); nothing if it runs on threads here, if the
+        cluster is open (serve's) or not ours (a scheduler, a client)."""
         c = self.compute
         if self.plan.path != "simulate" or not c.starts_cluster or c.is_open or \
                 self.runs_here(todo):
             return
-        c.start_early(None if todo is None else len(todo), (task.warm_up, self.plan.scene, self.plan.params,
-                                  self.plan.numerics.settings))
+        warm = (task.warm_up, self.plan.scene, self.plan.params, self.plan.numerics.settings)
+        c.start_early(None if todo is None else len(todo), warm)
         self.opened = True
         self.shown()
 
