@@ -22,7 +22,8 @@ What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
   dither), at the tolerances of their tests, recorded step by step.
 
 ``--quick`` thins each spec's axes to every third value (for iterating; the acceptance run is
-the full one). A difference prints the key, how many elements differ and the largest
+the full one). ``--specs-only`` records or compares the spec cubes alone (a change outside the
+engine: the probes and hard cases run code it did not touch). A difference prints the key, how many elements differ and the largest
 difference; the exit status is 1 if anything differs or is missing.
 """
 from __future__ import annotations
@@ -146,7 +147,9 @@ def spec_cubes(quick: bool) -> dict:
     return found
 
 
-def collect(quick: bool) -> dict:
+def collect(quick: bool, specs_only: bool = False) -> dict:
+    if specs_only:
+        return spec_cubes(quick)
     t0 = time.perf_counter()
     found = engine_probes()
     print(f"engine probes: {len(found)} arrays, {time.perf_counter() - t0:.1f} s", flush=True)
@@ -197,6 +200,7 @@ def main() -> int:
     ap.add_argument("file", type=Path)
     ap.add_argument("other", type=Path, nargs="?", help="diff: the second record")
     ap.add_argument("--quick", action="store_true", help="every third grid value of each spec")
+    ap.add_argument("--specs-only", action="store_true", help="the spec cubes alone")
     args = ap.parse_args()
     if args.action == "diff":
         if args.other is None:
@@ -207,13 +211,16 @@ def main() -> int:
 
     print(f"code from {Path(engine.__file__).parent.parent} "
           f"(sweeps from {Path(sweeps.__file__).parent.parent})", flush=True)
-    found = collect(args.quick)
+    found = collect(args.quick, args.specs_only)
     if args.action == "record":
         args.file.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.file, **found)
         print(f"recorded {len(found)} arrays in {args.file}")
         return 0
-    return compare(_load(args.file), found)
+    before = _load(args.file)
+    if args.specs_only:
+        before = {k: v for k, v in before.items() if k.startswith("spec/")}
+    return compare(before, found)
 
 
 if __name__ == "__main__":
