@@ -61,14 +61,16 @@ def submit(plan: Plan, store_root: str | Path, compute: Compute | None = None, *
     (taking the lease over if the holder dies first).
 
     ``progress`` is the display the run shows (sweeps.run.quiet; ``phases.shown(True)``
-    for bars on stderr), False for none.
-    ``max_blocks`` stops after that many new blocks (for tests of partial sweeps).
+    for bars on stderr), False for none; ``max_blocks`` stops after that many new blocks.
     ``owner`` the lease owner tag (default this process's ``host:pid``); ``stop`` a
     ``threading.Event`` that, once set, ends the run after its in-flight blocks and
     re-queues the sweep (serve). A cluster this call starts, it stops (after the result
     is reported); one already open (serve's) stays open.
     """
-    return Submission(plan, store_root, compute or Compute(), progress=progress, owner=owner,
+    compute = compute or Compute()
+    if plan.numerics.settings.device == "cuda":   # refused before the store is touched
+        compute.check_gpu()
+    return Submission(plan, store_root, compute, progress=progress, owner=owner,
                       stop=stop).run(max_blocks)
 
 
@@ -99,8 +101,6 @@ class Submission:
 
     def run(self, max_blocks: int | None) -> SubmitResult:
         try:
-            if self.plan.numerics.settings.device == "cuda":
-                self.compute.check_gpu()
             unjournaled = blocks_unjournaled(self.plan, self.journal)
             if unjournaled != []:   # (all journaled: failed points, the estimate: after the read)
                 self.start_early(unjournaled)

@@ -1,6 +1,6 @@
 """``ditherlab submit --device cuda`` (issue 36) on a machine without a GPU.
 
-- Without one: one line, exit 2, nothing computed or registered.
+- Without one: one line, exit 2, nothing computed, registered or written (no store folder).
 - Under numba's CUDA simulator (``NUMBA_ENABLE_CUDASIM=1`` in the command's environment) the
   whole service path runs the GPU kernel: its own sweep id (a GPU's numbers agree within
   tolerance, not bit for bit), the device in the cube's engine settings, and, in the simulator,
@@ -53,10 +53,11 @@ def test_without_a_gpu_the_device_is_refused_in_one_line(spec, tmp_path):
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "no CUDA GPU here" in lines[0] and "Traceback" not in proc.stderr
-    assert not [p for p in store.glob("*") if p.is_dir()]   # no sweep folder
+    assert not store.exists()   # nothing written: no sweep folder, no catalogue
     on_cluster = ditherlab("submit", spec, "--device", "cuda", "-q", "--scheduler",
                            "tcp://127.0.0.1:1", store=store, env=_no_sim())
     assert on_cluster.returncode == 2 and "not supported yet" in on_cluster.stderr
+    assert not store.exists()
 
 
 @pytest.mark.long   # 17-30 s of first compilations (2 cores): quick set <= 3 min, issue 38
