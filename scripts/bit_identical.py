@@ -23,7 +23,8 @@ What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
 
 ``--quick`` thins each spec's axes to every third value (for iterating; the acceptance run is
 the full one). ``--specs-only`` records or compares the spec cubes alone (a change outside the
-engine: the probes and hard cases run code it did not touch). A difference prints the key, how many elements differ and the largest
+engine: the probes and hard cases run code it did not touch). A difference prints the key,
+how many elements differ and the largest
 difference; the exit status is 1 if anything differs or is missing.
 """
 from __future__ import annotations

@@ -46,7 +46,6 @@ def _cost_rank(item) -> tuple[int, int]:
     return 1, 0
 
 
-
 def pytest_collection_modifyitems(config, items):
     markexpr = config.getoption("markexpr") or ""
     if not markexpr.strip():
