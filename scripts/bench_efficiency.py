@@ -118,7 +118,8 @@ def one(spec, workers: int, cold: bool, tree: Path = ROOT) -> dict:
     """One submit in a fresh process and a fresh store, with the code of ``tree``; its
     numbers."""
     with tempfile.TemporaryDirectory() as tmp:
-        env = {**os.environ, "PYTHONPATH": str(tree)}
+        path = [str(tree), *filter(None, [os.environ.get("PYTHONPATH")])]
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(path)}   # (keeps carried packages)
         if cold:
             env["DITHERLAB_CACHE_DIR"] = str(Path(tmp) / "kernel-cache")
         t = time.perf_counter()

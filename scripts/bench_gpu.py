@@ -1,7 +1,7 @@
 """GPU against all CPU cores of the same machine, and against the hand-written GPU kernel.
 
     python3 scripts/bench_gpu.py                    # on a machine with an NVIDIA GPU
-    python3 scripts/bench_gpu.py --points 131072 --cpu-points 8192 --fig14 961
+    python3 scripts/bench_gpu.py --points 131072 --cpu-points 2048 --fig14 16384
     NUMBA_ENABLE_CUDASIM=1 python3 scripts/bench_gpu.py --smoke    # anywhere: the script runs
 
 One run prints, with the CPU model, its core count and the GPU's name:
@@ -19,9 +19,11 @@ One run prints, with the CPU model, its core count and the GPU's name:
 3. agreement: the largest relative difference GPU vs CPU over the points both computed,
    per output (fixed step: the promise is 1e-9 relative; adaptive: the level's).
 
-Times are medians of ``--repeats`` after a warm-up launch (which compiles). The CPU side
-runs ``--cpu-points`` points (fewer than the GPU's: a core needs ~10 ms a point here) and
-its rate is points/s over all cores.
+GPU times are medians of ``--repeats`` after a warm-up launch on a few points (which
+compiles: its time is printed as the first call's). The CPU side runs once, after its own
+warm-up (loading or compiling its kernels), on ``--cpu-points`` / ``--fig14-cpu`` points spread
+evenly over the GPU's (a core needs ~10 ms a point of the anchors' scene and ~0.2 s of Fig.
+14's); its rate is points/s over all cores.
 """
 from __future__ import annotations
 
@@ -41,12 +43,6 @@ from machine import cores, cpu_model
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 ANCHOR_CUDA = ROOT.parent / "shared" / "anchors" / "anchor_cuda.py"
-
-# numba-cuda 0.30 registers overloads for names numpy 2.5 removed (../shared/recipes/gpu.md)
-for _old, _new in (("row_stack", "vstack"), ("trapz", "trapezoid"), ("in1d", "isin")):
-    if not hasattr(np, _old) and hasattr(np, _new):
-        setattr(np, _old, getattr(np, _new))
-
 
 def anchors_case(n: int, t_end: float):
     """``(scene, p, points, settings)`` of the anchors' fig10 scene, W over [0, 0.8)."""
@@ -71,7 +67,7 @@ def fig14_case(n: int, t_end: float | None):
     side = max(1, int(round(n ** 0.5)))
     coords = plan.grid.coords
     W = np.linspace(coords["W"].min(), coords["W"].max(), side)
-    omega = np.linspace(coords["omega"].min(), coords["omega"].max(), side)
+    omega = np.geomspace(coords["omega"].min(), coords["omega"].max(), side)   # (log, as the spec)
     WW, OO = np.meshgrid(W, omega, indexing="ij")
     p = plan.params.copy()
     if t_end is not None:
@@ -81,14 +77,18 @@ def fig14_case(n: int, t_end: float | None):
     return plan.scene, p, points, plan.numerics.settings
 
 
-def timed(fn, repeats: int) -> tuple[float, object]:
-    fn()   # warm-up: compiles (GPU) or loads the kernel cache (CPU)
+def timed(fn, repeats: int, warm=None) -> tuple[float, object, float]:
+    """``(median seconds, result, warm-up seconds)``: ``warm`` (default ``fn``) runs first,
+    compiling the GPU kernel or loading the CPU kernel cache."""
+    t0 = time.perf_counter()
+    (warm or fn)()
+    warm_s = time.perf_counter() - t0
     times, result = [], None
     for _ in range(repeats):
         t0 = time.perf_counter()
         result = fn()
         times.append(time.perf_counter() - t0)
-    return float(np.median(times)), result
+    return float(np.median(times)), result, warm_s
 
 
 def on_cpu(scene, p, points, settings, threads: int):
@@ -137,20 +137,29 @@ def row(label: str, n: int, seconds: float) -> str:
     return f"| {label} | {n:,} | {seconds:.3f} s | {n / seconds:,.0f} |"
 
 
+def spread(n: int, k: int) -> np.ndarray:
+    """``k`` indices spread evenly over ``range(n)`` (the CPU's share keeps the cost mix)."""
+    return np.unique(np.linspace(0, n - 1, min(k, n)).round().astype(int))
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--points", type=int, default=131072, help="GPU points, anchors' scene")
-    ap.add_argument("--cpu-points", type=int, default=8192, help="CPU points, anchors' scene")
-    ap.add_argument("--fig14", type=int, default=961, help="Fig. 14 points (GPU and CPU)")
+    ap.add_argument("--points", type=int, default=1048576, help="GPU points, anchors' scene")
+    ap.add_argument("--cpu-points", type=int, default=4096, help="CPU points, anchors' scene")
+    ap.add_argument("--fig14", type=int, default=65536, help="GPU points, Fig. 14's scene")
+    ap.add_argument("--fig14-cpu", type=int, default=256,
+                    help="CPU points, Fig. 14's scene (spread over the GPU's)")
     ap.add_argument("--tend", type=float, default=100.0, help="tau span of the anchors' scene")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--only", choices=("anchors", "fig14"), default=None,
+                    help="one of the two scenes")
     ap.add_argument("--smoke", action="store_true",
                     help="a few points on a short span (the CUDA simulator)")
     args = ap.parse_args()
     fig14_tend = None
     if args.smoke:
-        args.points, args.cpu_points, args.fig14, args.tend, args.repeats = 64, 16, 4, 0.5, 1
-        fig14_tend = 0.5
+        args.points, args.cpu_points, args.fig14, args.fig14_cpu = 64, 16, 9, 4
+        args.tend, args.repeats, fig14_tend = 0.5, 1, 0.5
 
     from engine import gpu
 
@@ -158,40 +167,50 @@ def main() -> int:
     threads = cores()
     print(f"CPU: {cpu_model()}, {threads} cores; GPU: {device}; numba "
           f"{__import__('numba').__version__}", flush=True)
-    print("\n| run | points | time | points/s |\n| --- | --- | --- | --- |", flush=True)
+    print("\n| run | points | time | points/s | first call (compile) |\n"
+          "| --- | --- | --- | --- | --- |", flush=True)
     report = {"cpu": cpu_model(), "cores": threads, "gpu": device}
 
-    scene, p, points, settings = anchors_case(args.points, args.tend)
-    t_gpu, g_out = timed(lambda: on_gpu(scene, p, points, settings), args.repeats)
-    print(row("anchors scene, engine on the GPU", args.points, t_gpu), flush=True)
-    cpu_pts = points[:args.cpu_points]
-    t_cpu, c_out = timed(lambda: on_cpu(scene, p, cpu_pts, settings, threads), args.repeats)
-    print(row(f"anchors scene, engine on {threads} CPU cores", len(cpu_pts), t_cpu), flush=True)
-    hand = hand_kernel(args.points, args.tend)
-    if hand and "points_per_s" in hand:
-        print(row("anchors scene, hand kernel (anchor_cuda.py)", args.points, hand["seconds"]),
+    def measure(label, name, scene, p, points, settings, n_cpu):
+        few = points[:min(len(points), 2 * threads)]
+        t_gpu, g_out, w_gpu = timed(lambda: on_gpu(scene, p, points, settings), args.repeats,
+                                    warm=lambda: on_gpu(scene, p, few, settings))
+        print(row(f"{label}, engine on the GPU", len(points), t_gpu) + f" {w_gpu:.1f} s |",
               flush=True)
-    a_ratio = (args.points / t_gpu) / (len(cpu_pts) / t_cpu)
-    report["anchors"] = {"gpu_pps": args.points / t_gpu, "cpu_pps": len(cpu_pts) / t_cpu,
-                         "ratio": a_ratio, "hand": hand,
-                         "agreement": agreement(c_out, g_out, len(cpu_pts))}
+        share = spread(len(points), n_cpu)
+        cpu_pts = points[share]
+        t_cpu, c_out, w_cpu = timed(lambda: on_cpu(scene, p, cpu_pts, settings, threads), 1,
+                                    warm=lambda: on_cpu(scene, p, few, settings, threads))
+        print(row(f"{label}, engine on {threads} CPU cores", len(cpu_pts), t_cpu)
+              + f" {w_cpu:.1f} s |", flush=True)
+        gpu_pps, cpu_pps = len(points) / t_gpu, len(cpu_pts) / t_cpu
+        report[name] = {"gpu_points": len(points), "gpu_s": t_gpu, "gpu_pps": gpu_pps,
+                        "gpu_first_s": w_gpu, "cpu_points": len(cpu_pts), "cpu_s": t_cpu,
+                        "cpu_pps": cpu_pps, "ratio": gpu_pps / cpu_pps,
+                        "agreement": agreement(c_out, {k: v[share] for k, v in g_out.items()},
+                                               len(cpu_pts))}
 
-    scene, p, points, settings = fig14_case(args.fig14, fig14_tend)
-    t_gpu, g_out = timed(lambda: on_gpu(scene, p, points, settings), args.repeats)
-    print(row(f"Fig. 14 scene ({scene.integrator}), engine on the GPU", len(points), t_gpu),
-          flush=True)
-    t_cpu, c_out = timed(lambda: on_cpu(scene, p, points, settings, threads), args.repeats)
-    print(row(f"Fig. 14 scene, engine on {threads} CPU cores", len(points), t_cpu), flush=True)
-    f_ratio = t_cpu / t_gpu
-    report["fig14"] = {"points": len(points), "gpu_s": t_gpu, "cpu_s": t_cpu, "ratio": f_ratio,
-                       "agreement": agreement(c_out, g_out, len(points))}
+    hand = None
+    if args.only in (None, "anchors"):
+        measure("anchors scene", "anchors", *anchors_case(args.points, args.tend),
+                args.cpu_points)
+        hand = hand_kernel(args.points, args.tend)
+        report["anchors"]["hand"] = hand
+        if hand and "points_per_s" in hand:
+            print(row("anchors scene, hand kernel (anchor_cuda.py)", args.points,
+                      hand["seconds"]) + " - |", flush=True)
+    if args.only in (None, "fig14"):
+        scene, p, points, settings = fig14_case(args.fig14, fig14_tend)
+        measure(f"Fig. 14 scene ({scene.integrator})", "fig14", scene, p, points, settings,
+                args.fig14_cpu)
 
-    print(f"\nGPU / {threads} CPU cores: anchors scene {a_ratio:.3g}x, Fig. 14 {f_ratio:.3g}x",
-          flush=True)
+    shown = [k for k in ("anchors", "fig14") if k in report]
+    print(f"\nGPU / {threads} CPU cores: "
+          + ", ".join(f"{k} {report[k]['ratio']:.3g}x" for k in shown), flush=True)
     if hand and "points_per_s" in hand:
         print(f"engine / hand kernel on the GPU: "
-              f"{(args.points / t_gpu) / hand['points_per_s']:.2f}", flush=True)
-    for name in ("anchors", "fig14"):
+              f"{report['anchors']['gpu_pps'] / hand['points_per_s']:.2f}", flush=True)
+    for name in shown:
         worst = max(report[name]["agreement"].values())
         print(f"{name}: largest relative difference GPU vs CPU {worst:.1e} "
               f"({report[name]['agreement']})", flush=True)

@@ -107,9 +107,10 @@ def test_what_stays_on_the_cpu_says_why():
         gpu.block_kernel(scene(integrator="rosenbrock"))
 
 
-def test_the_gpu_runs_points_by_omega_highest_first():
+def test_the_gpu_runs_points_by_omega_then_amplitude_highest_first():
     """engine.gpu.cost_order: a warp's threads get similar costs (that the results come back
     in the caller's order is the simulator test's: its points are not sorted by omega)."""
     order = gpu.cost_order(np.array([[0.1, 300.0, 0.4, 0.1], [0.1, 10.0, 0.4, 0.1],
-                                     [0.1, 100.0, 0.4, 0.1]]))
-    assert order.tolist() == [0, 2, 1]
+                                     [0.1, 100.0, 0.4, 0.1], [3.0, 100.0, 0.4, 0.1],
+                                     [0.0, 300.0, 0.4, 0.1]]))
+    assert order.tolist() == [0, 4, 3, 2, 1]
