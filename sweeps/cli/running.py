@@ -112,6 +112,24 @@ def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
                                "job start-up (an idle queue; a busy one adds its wait)")
 
 
+def _estimated_device(spec, plan):
+    """``(spec, GPU name)`` for a plan run on the GPU; without a GPU the plan says so in one
+    line and estimates the CPU instead (``(spec on the cpu, "")``): a GPU's calibration is
+    measured on one, never made up from launches that could not run."""
+    if spec.device != "cuda":
+        return spec, ""
+    on_cpu = spec.model_copy(update={"device": "cpu"})
+    if plan.device_note:   # it runs on the CPU (a level's plan might not: estimated so too)
+        return on_cpu, ""
+    from engine.gpu import NoGPU, check_device
+
+    try:
+        return spec, check_device()
+    except NoGPU as exc:
+        print(f"           {exc}; the estimates below are for this machine's CPU")
+        return on_cpu, ""
+
+
 def _compute(args):
     """Where the blocks are computed: ``--scheduler ADDRESS``, ``--cluster KIND --jobs N``
     batch jobs, or ``--workers N`` local processes; ``--dashboard``."""
@@ -181,12 +199,20 @@ def cmd_plan(args) -> int:
         print(f"device     {plan.device_note or 'cuda: one GPU thread a point'}")
     print(f"outputs    {', '.join(plan.outputs)}")
     workers, start = _plan_workers(args, plan)
-    print(f"estimates  (calibrated now on this machine, {workers} workers, compute "
-          f"phase{start[1]}; first compilation comes on top)")
+    spec, on_gpu = _estimated_device(spec, plan)
+    if on_gpu:
+        print(f"estimates  (calibrated now on this machine's GPU, {on_gpu}: a block is one "
+              f"launch of up to {max(len(b) for b in plan.blocks)} points, blocks one after "
+              "another; a launch lasts at least its slowest point; first compilation comes "
+              "on top)")
+    else:
+        print(f"estimates  (calibrated now on this machine, {workers} workers, compute "
+              f"phase{start[1]}; first compilation comes on top)")
     found = estimates(spec, workers=workers)
     for est in found:
+        slowest = f", slowest point {format_seconds(est.slowest_s)}" if on_gpu else ""
         print(f"  {est.level:<10} {est.integrator:<11} {format_seconds(est.per_point_s):>9} "
-              f"per point  ->  {format_seconds(est.wall_s + start[0])} wall")
+              f"per point{slowest}  ->  {format_seconds(est.wall_s + start[0])} wall")
     root = store_root(args.store)
     previous = history.last_comparison(root)
     if previous:

@@ -5,6 +5,14 @@ centre, so the most expensive omega is included) are integrated here over a shor
 window; the per-point cost is scaled by ``t_end / window`` and by the number of points,
 and divided by the number of workers. Compilation is excluded (a warm-up call first).
 The analysis paths are timed on a sample block directly.
+
+On the GPU (spec ``device = "cuda"``) a block is one kernel launch, one thread a point, and a
+launch lasts at least as long as its slowest thread: one GPU thread is ~40x slower than a
+CPU core (Fig. 14's costliest point, W = 3 and omega = 1000, takes 1.2 s on a core and ~45 s
+on an H200 thread; docs/GPU.md). So the GPU is calibrated by two launches over the same
+short window: the sample points alone (the latency: their slowest thread) and the samples
+repeated to a full block (the throughput at that fill); a block of ``m`` points is then
+``max(latency, m / throughput)``, and blocks run one after another on the one GPU.
 """
 from __future__ import annotations
 
@@ -22,6 +30,7 @@ from ..workers.task import compute_block, warm_up
 CAL_WINDOW = 5.0      # time units integrated per calibration point
 MAX_SAMPLES = 5
 TASK_OVERHEAD_S = 2e-3  # per dask task, measured ~1.6 ms here
+GPU_SIM_POINTS = 8      # the throughput launch under numba's CUDA simulator (Python-slow)
 
 
 @dataclass
@@ -30,6 +39,7 @@ class Estimate:
     integrator: str
     per_point_s: float
     wall_s: float
+    slowest_s: float = 0.0   # on the GPU: the latency a launch cannot beat (its slowest point)
 
 
 def sample_points(plan: Plan) -> np.ndarray:
@@ -43,21 +53,52 @@ def sample_points(plan: Plan) -> np.ndarray:
     return pts[sorted(picks)[:MAX_SAMPLES]]
 
 
-def _time_block(plan: Plan, pts: np.ndarray) -> float:
+def _window(plan: Plan) -> tuple[np.ndarray, float]:
+    """The plan's parameters over the calibration window, and the factor back to t_end."""
     p = plan.params.copy()
-    scale = 1.0
-    if plan.path == "simulate":
-        window = min(p[P.T_END], CAL_WINDOW)
-        scale = p[P.T_END] / window
-        p[P.T_END], p[P.T_TRANSIENT] = window, 0.0
+    if plan.path != "simulate":
+        return p, 1.0
+    window = min(p[P.T_END], CAL_WINDOW)
+    scale = p[P.T_END] / window
+    p[P.T_END], p[P.T_TRANSIENT] = window, 0.0
+    return p, scale
+
+
+def _time_block(plan: Plan, pts: np.ndarray) -> float:
+    p, scale = _window(plan)
     t0 = time.perf_counter()
     compute_block(plan.scene, pts, p, plan.numerics.settings)
     return (time.perf_counter() - t0) / len(pts) * scale
 
 
+def _gpu_estimate(plan: Plan, level: str) -> Estimate:
+    """The GPU's calibration (module docstring): raises :class:`engine.gpu.NoGPU` without
+    a GPU, and what a failed launch raises (never a made-up number)."""
+    from engine import gpu
+    from engine.blocks import run_block
+
+    p, scale = _window(plan)
+    settings, pts = plan.numerics.settings, sample_points(plan)
+
+    def launch(points) -> float:
+        t0 = time.perf_counter()
+        run_block(plan.scene, points, p, settings)
+        return (time.perf_counter() - t0) * scale
+
+    launch(pts[:1])   # compiles the kernel (its time is not the sweep's: it is cached)
+    latency = launch(pts)
+    full = max(len(b) for b in plan.blocks)
+    tiled = np.resize(pts, (min(full, GPU_SIM_POINTS if gpu.simulated() else full), 4))
+    rate = len(tiled) / max(launch(tiled), 1e-9)
+    wall = sum(max(latency, len(b) / rate) + TASK_OVERHEAD_S for b in plan.blocks)
+    return Estimate(level, plan.numerics.integrator, 1.0 / rate, wall, latency)
+
+
 def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:
     """Estimated wall time of ``spec`` at accuracy ``level`` on ``workers`` cores."""
     plan = make_plan(spec, level)
+    if plan.numerics.settings.device == "cuda":
+        return _gpu_estimate(plan, level)
     warm_up(plan.scene, plan.params, plan.numerics.settings)
     pts = sample_points(plan)
     if plan.path != "simulate":

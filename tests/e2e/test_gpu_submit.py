@@ -73,6 +73,31 @@ def test_plan_says_what_stays_on_the_cpu(spec, tmp_path):
     cpu = ditherlab("plan", spec, store=tmp_path / "store", env=_no_sim())
     assert "device     cuda: one GPU thread a point" in gpu.stdout
     assert gpu.stdout.split()[1] != cpu.stdout.split()[1]   # another sweep id
+    # no GPU to calibrate on: said in one line, and the estimates are the CPU's (before,
+    # the failed launches were timed: "1 ms per point -> 1.2 s wall" for Fig. 14)
+    assert "no CUDA GPU here" in gpu.stdout and "estimates below are for this machine's CPU" \
+        in gpu.stdout and "slowest point" not in gpu.stdout
+    assert gpu.stdout.split("estimates  ")[1] .count(" wall") == 3
+
+
+@pytest.mark.long
+def test_plan_on_the_gpu_is_calibrated_by_launches_there(spec, tmp_path):
+    """Under the simulator the GPU estimate's path runs: two launches per level (the samples
+    alone: the slowest point, a launch's floor; the samples repeated: the throughput), and
+    every block's wall at least that floor."""
+    sim = _no_sim() | {"NUMBA_ENABLE_CUDASIM": "1"}
+    proc = ditherlab("plan", spec, "--device", "cuda", store=tmp_path / "store", env=sim,
+                     check=True)
+    assert "calibrated now on this machine's GPU, simulator" in proc.stdout
+    rows = [line.split() for line in proc.stdout.splitlines() if "per point, slowest" in line]
+    assert [r[0] for r in rows] == ["draft", "standard", "reference"], proc.stdout
+
+    def seconds(value, unit):
+        return float(value) * {"ms": 1e-3, "s": 1.0, "min": 60.0, "h": 3600.0}[unit.rstrip(",")]
+
+    for r in rows:   # level integrator N unit per point, slowest point N unit -> N unit wall
+        slowest, wall = seconds(*r[r.index("slowest") + 2:][:2]), seconds(*r[-3:-1])
+        assert 0 < slowest <= wall, r
 
 
 @pytest.mark.long
