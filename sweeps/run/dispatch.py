@@ -35,7 +35,8 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progres
     earlier call on the same client, or by the early start: ``client.run`` would wait for
     the filler tasks still running). Times go to ``sink.timings``."""
     bar = points_bar(plan, todo, progress)
-    client = matched(compute.client, [ref for ref, _ in plan.scene.digests])
+    client = matched(compute.client, [ref for ref, _ in plan.scene.digests],
+                     gpu=plan.numerics.settings.device == "cuda")
     if todo:   # batch jobs for these blocks: serve waits without any, a refined level may end some
         compute.start(len(todo))
     t = time.perf_counter()

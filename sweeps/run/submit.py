@@ -1,13 +1,12 @@
 """Running a plan: blocks of points as dask tasks, a journal of finished blocks, and a
 cube rebuilt from the journal and published atomically (DESIGN.md §4).
 
-The submitting process is the only writer, and only while it holds the sweep's lease in
-the catalogue (sweeps.service): a second submitter of a running sweep attaches to it
-instead of computing. Workers compute and return arrays; they never touch files. Each
-finished block is journaled at once (temporary name, fsync,
-rename), so a submitter killed at any instant loses at most the blocks in flight; the
-cube is republished every few blocks and at the end. A resubmitted spec computes only
-the blocks missing from the journal.
+The submitting process is the only writer, and only while it holds the sweep's lease in the
+catalogue (sweeps.service): a second submitter of a running sweep attaches to it instead of
+computing. Workers compute and return arrays; they never touch files. Each finished block
+is journaled at once (temporary name, fsync, rename), so a submitter killed at any instant
+loses at most the blocks in flight; the cube is republished every few blocks and at the
+end. A resubmitted spec computes only the blocks missing from the journal.
 
 The pieces: where blocks are computed (sweeps.workers.compute.Compute), the worker's task
 (sweeps.workers.task), what a run starts from (sweeps.run.preparation), the empty cube of
@@ -129,12 +128,13 @@ class Submission:
         return self.finish(max_blocks)
 
     def runs_here(self, todo: list[int]) -> bool:
-        """On threads of this process: a sweep on the GPU (this machine's: check_gpu), the
-        analysis paths (microseconds a point) unless a scheduler is named, and a simulated
-        sweep priced below a local cluster's start (not when the cluster is open already,
-        serve's, nor with a dashboard asked for)."""
-        c, gpu = self.compute, self.plan.numerics.settings.device == "cuda"
-        return gpu or (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
+        """On threads of this process: a sweep on this machine's GPU, the analysis paths
+        unless a scheduler is named, and a simulated sweep priced below a local cluster's
+        start (not when the cluster is open already, serve's, nor with a dashboard)."""
+        c = self.compute
+        if self.plan.numerics.settings.device == "cuda":   # else a cluster's GPU workers
+            return c.kind == LOCAL
+        return (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
             c.kind == LOCAL and not c.dashboard and not c.is_open and
             small(self.plan, todo, c.threads))
 

@@ -68,17 +68,22 @@ class Compute:
                 CLIENT: "the caller's dask client"}[kind]
 
     def check_gpu(self) -> None:
-        """A sweep on the GPU (spec ``device = "cuda"``) runs its blocks from the submitting
-        process on this machine's GPU: one line (exit 2) when there is none, or when the
-        compute asked for is a cluster."""
+        """A sweep on the GPU (spec ``device = "cuda"``) runs its blocks on this machine's
+        GPU from the submitting process (local workers), or on a dask cluster's GPU workers
+        (a scheduler or a client: sweeps.workers.matching, checked once connected). One line
+        (exit 2) when this machine has no GPU, or for batch jobs."""
         from engine.gpu import NoGPU, check_device
 
         from ..errors import RefusedError
 
+        if self.kind == BATCH:
+            raise RefusedError(f"device cuda: a sweep on the GPU runs on this machine's GPU "
+                               f"or a dask cluster's GPU workers, not on {self.where} (batch "
+                               "jobs with GPUs are not supported yet); submit it without "
+                               "--cluster, or start GPU workers with `dask worker ADDRESS "
+                               "--resources GPU=1` and give --scheduler ADDRESS")
         if self.kind != LOCAL:
-            raise RefusedError(f"device cuda: a sweep on the GPU runs on this machine's GPU, "
-                               f"not on {self.where} (dask workers with a GPU resource are not "
-                               f"supported yet); submit it without --scheduler/--cluster")
+            return
         try:
             check_device()
         except NoGPU as exc:

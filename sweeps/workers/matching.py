@@ -13,6 +13,12 @@ own fingerprint again before journaling it (sweeps.run.sink), the last line of d
 
 :class:`MatchedClient` is the run's client with these restrictions applied to ``submit``,
 ``map`` and ``run``; everything else is the dask client's.
+
+A sweep on the GPU (spec ``device = "cuda"``) on a dask cluster goes to GPU workers: workers
+started with a ``GPU`` resource (``dask worker ADDRESS --resources GPU=1``, dask's own
+resource mechanism). Its tasks are restricted to the matching workers that have one and ask
+for one each (``resources={"GPU": 1}``: one block at a time per GPU); with none connected
+the run ends in one line (:class:`NoGPUWorkersError`).
 """
 from __future__ import annotations
 
@@ -32,6 +38,18 @@ class ForeignWorkersError(UserError):
     """Workers are connected, and none runs this submitter's engine."""
 
 
+class NoGPUWorkersError(UserError):
+    """A GPU sweep on a cluster whose matching workers have no GPU resource."""
+
+
+GPU = "GPU"   # the dask worker resource a GPU worker declares
+
+
+def _gpus(dask_worker) -> float:
+    """The GPU resource a worker declares (run on the worker by ``client.run``)."""
+    return float(dask_worker.state.total_resources.get(GPU, 0))
+
+
 class WorkerCheck:
     """The identity of every worker seen (asked once per worker address) and which match."""
 
@@ -41,10 +59,14 @@ class WorkerCheck:
         self.own = task.identity()
         self.seen: dict[str, dict | str] = {}   # address -> identity, or why the check failed
         self.told: set[str] = set()
+        self.gpu = False                        # the run's blocks need a GPU worker
+        self.gpus: dict[str, float] = {}        # address -> its GPU resource, once asked
 
-    def expect(self, models) -> None:
+    def expect(self, models, gpu: bool = False) -> None:
         """The models this run brings by import path (engine.registry): a worker must also
-        import the same source of each (its digest in the identity) to get a block."""
+        import the same source of each (its digest in the identity) to get a block; ``gpu``:
+        and have a GPU resource (a sweep on the GPU)."""
+        self.gpu = gpu
         models = tuple(sorted(models))
         if models != self.models:
             self.models = models
@@ -70,7 +92,27 @@ class WorkerCheck:
         if fresh:
             self.told.update(fresh)
             log.warning("%s", self.line(fresh, alone=False))
-        return good
+        return self._with_gpu(good) if self.gpu else good
+
+    def _with_gpu(self, good: dict[str, int]) -> dict[str, int]:
+        """The workers of ``good`` with a GPU resource; :class:`NoGPUWorkersError` when
+        there are workers and none has one."""
+        new = [a for a in good if a not in self.gpus]
+        if new:
+            try:
+                self.gpus.update(self.client.run(_gpus, workers=new, on_error="return"))
+            except Exception as exc:  # noqa: BLE001 -- a worker left meanwhile: ask next time
+                log.debug("GPU resource check failed (%s); asking again", exc)
+        with_gpu = {a: n for a, n in good.items()
+                    if isinstance(self.gpus.get(a), float) and self.gpus[a] >= 1}
+        if good and not with_gpu and all(a in self.gpus for a in good):
+            raise NoGPUWorkersError(
+                f"device cuda: none of the {len(good)} workers of this cluster has a GPU "
+                f"resource, nothing was computed; start GPU workers with `dask worker "
+                f"ADDRESS --resources {GPU}=1` on machines with an NVIDIA GPU and numba-cuda "
+                "(docs/GPU.md), or submit without --device cuda (the journal keeps every "
+                "finished block)")
+        return with_gpu
 
     def wait(self, should_stop=lambda: False) -> dict[str, int]:
         """:meth:`matching` once it is not empty (batch jobs may still be starting); an
@@ -126,24 +168,30 @@ class MatchedClient:
     def __getattr__(self, name):
         return getattr(self.client, name)
 
+    def _needs(self) -> dict:
+        return {"resources": {GPU: 1}} if self.check.gpu else {}
+
     def submit(self, *args, workers=None, **kwargs):
         workers = list(workers or self.check.wait())
-        return self.client.submit(*args, workers=workers, allow_other_workers=False, **kwargs)
+        return self.client.submit(*args, workers=workers, allow_other_workers=False,
+                                  **self._needs(), **kwargs)
 
     def map(self, *args, workers=None, **kwargs):
         workers = list(workers or self.check.wait())
-        return self.client.map(*args, workers=workers, allow_other_workers=False, **kwargs)
+        return self.client.map(*args, workers=workers, allow_other_workers=False,
+                               **self._needs(), **kwargs)
 
     def run(self, *args, workers=None, **kwargs):
         return self.client.run(*args, workers=list(workers or self.check.wait()), **kwargs)
 
 
-def matched(client, models=()):
+def matched(client, models=(), gpu: bool = False):
     """``client`` as a :class:`MatchedClient` (itself if it is one already; None stays None),
-    expecting ``models``: the import paths of the run's brought models (WorkerCheck.expect)."""
+    expecting ``models``: the import paths of the run's brought models, and ``gpu`` workers
+    for a sweep on the GPU (WorkerCheck.expect)."""
     if client is None:
         return client
     if not isinstance(client, MatchedClient):
         client = MatchedClient(client)
-    client.check.expect(models)
+    client.check.expect(models, gpu)
     return client

@@ -60,7 +60,8 @@ def _fingerprint_of(pythonpath: Path, cwd: Path) -> str:
 
 @pytest.fixture
 def scheduler(tmp_path):
-    """A scheduler and the workers a test adds (``start(env)``), stopped at the end."""
+    """A scheduler and the workers a test adds (``start(env, n_before, *worker_options)``),
+    stopped at the end."""
     elsewhere = tmp_path / "elsewhere"   # outside the checkout: no package beside the cwd
     elsewhere.mkdir()
     sched_file = tmp_path / "scheduler.json"
@@ -69,10 +70,10 @@ def scheduler(tmp_path):
                                "127.0.0.1:0", "--scheduler-file", str(sched_file)],
                               cwd=elsewhere, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
 
-    def start(env: dict, n_before: int) -> None:
+    def start(env: dict, n_before: int, *options: str) -> None:
         procs.append(subprocess.Popen(
             [sys.executable, "-m", "distributed.cli.dask_worker", address, "--nthreads", "1",
-             "--host", "127.0.0.1", "--no-dashboard"], cwd=elsewhere, env=env,
+             "--host", "127.0.0.1", "--no-dashboard", *options], cwd=elsewhere, env=env,
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
         _wait_for_workers(address, n_before + 1)
 

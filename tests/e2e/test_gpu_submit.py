@@ -6,7 +6,8 @@
   tolerance, not bit for bit), the device in the cube's engine settings, and, in the simulator,
   the CPU sweep's numbers exactly (the simulator runs the engine's CPU machine code; on a GPU
   scripts/bench_gpu.py compares).
-- What stays on the CPU says so; a cluster with ``--device cuda`` is refused in one line.
+- What stays on the CPU says so; batch jobs with ``--device cuda`` are refused in one line
+  (a scheduler's GPU workers: tests/e2e/test_gpu_workers.py).
 """
 import json
 import os
@@ -54,9 +55,11 @@ def test_without_a_gpu_the_device_is_refused_in_one_line(spec, tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and "no CUDA GPU here" in lines[0] and "Traceback" not in proc.stderr
     assert not store.exists()   # nothing written: no sweep folder, no catalogue
-    on_cluster = ditherlab("submit", spec, "--device", "cuda", "-q", "--scheduler",
-                           "tcp://127.0.0.1:1", store=store, env=_no_sim())
-    assert on_cluster.returncode == 2 and "not supported yet" in on_cluster.stderr
+    on_batch = ditherlab("submit", spec, "--device", "cuda", "-q", "--cluster", "slurm",
+                         store=store, env=_no_sim())   # (a scheduler's GPU workers:
+    assert on_batch.returncode == 2, on_batch.stderr   # tests/e2e/test_gpu_workers.py)
+    assert "batch jobs with GPUs are not supported yet" in on_batch.stderr
+    assert len(on_batch.stderr.strip().splitlines()) == 1
     assert not store.exists()
 
 
