@@ -10,7 +10,9 @@
 # carried as cp312 wheels in .whl/ they are installed into /tmp/site first. ../shared/anchors
 # (the hand kernel) is carried in .devshared/anchors. Each step has its own time limit and
 # its own log in OUTDIR, so one that fails or hangs costs only its own limit; the steps run
-# in the order of what matters most.
+# in the order of what matters most. Steps: env, fig14 (end to end on the GPU), variants
+# (gpu_check --run), bench (bench_gpu), efficiency (bench_efficiency, all cores), map,
+# plan (the GPU-calibrated estimate), workers (a dask worker with a GPU resource).
 set -u
 OUT=${1:?usage: gpu_session.sh OUTDIR}
 mkdir -p "$OUT"
@@ -77,5 +79,39 @@ dest.write_text(text)
 EOF
 step "map_${MAP}" 100 $PY -m sweeps.cli submit "$STORE/map.toml" --device cuda \
     --store "$STORE/map" --max-points 2000000 -v
+
+# the GPU-calibrated estimate (ditherlab plan --device cuda), to set beside fig14's launch
+SPEC=specs/fig14.toml
+if [ -n "${SMOKE:-}" ]; then
+    SPEC=$STORE/tiny.toml
+    printf '%s\n' 'name = "tiny"' 'friction = "lugre"' 'dither = "square-velocity"' \
+        'accuracy = "draft"' '[time]' 't_end = 0.5' 't_transient = 0.1' '[grid]' \
+        'W = [0.0, 0.3]' 'omega = [200.0]' 'v_ref = [0.4]' 'v_d = [0.1]' >"$SPEC"
+fi
+step plan 120 $PY -m sweeps.cli plan "$SPEC" --device cuda
+
+# a dask cluster's GPU worker (dask worker --resources GPU=1) computing the sweep
+workers_run() {
+    local dir=$STORE/cluster pids=() rc
+    mkdir -p "$dir"
+    $PY -m distributed.cli.dask_scheduler --host 127.0.0.1 --port 0 --no-dashboard \
+        --scheduler-file "$dir/s.json" >"$dir/scheduler.log" 2>&1 &
+    pids+=($!)
+    for _ in $(seq 100); do [ -s "$dir/s.json" ] && break; sleep 0.2; done
+    $PY -m distributed.cli.dask_worker --scheduler-file "$dir/s.json" --nthreads 1 \
+        --resources GPU=1 --no-dashboard >"$dir/worker.log" 2>&1 &
+    pids+=($!)
+    local address
+    address=$($PY -c "import json,sys; print(json.load(open(sys.argv[1]))['address'])" \
+        "$dir/s.json")
+    $PY -m sweeps.cli submit "$SPEC" --device cuda --scheduler "$address" \
+        --store "$dir/store" -v
+    rc=$?
+    kill "${pids[@]}" 2>/dev/null
+    return $rc
+}
+export -f workers_run
+export PY STORE SPEC
+step workers 150 bash -c workers_run
 
 rm -rf "$STORE"
