@@ -90,8 +90,15 @@ def _gpu_estimate(plan: Plan, level: str) -> Estimate:
     full = max(len(b) for b in plan.blocks)
     tiled = np.resize(pts, (min(full, GPU_SIM_POINTS if gpu.simulated() else full), 4))
     rate = len(tiled) / max(launch(tiled), 1e-9)
-    wall = sum(max(latency, len(b) / rate) + TASK_OVERHEAD_S for b in plan.blocks)
+    wall = gpu_wall([len(b) for b in plan.blocks], latency, rate)
     return Estimate(level, plan.numerics.integrator, 1.0 / rate, wall, latency)
+
+
+def gpu_wall(block_points: list[int], latency_s: float, points_per_s: float) -> float:
+    """Blocks of ``block_points`` points launched one after another on one GPU: each lasts
+    its slowest thread (``latency_s``) or its points at the GPU's throughput, whichever is
+    longer (module docstring)."""
+    return sum(max(latency_s, m / points_per_s) + TASK_OVERHEAD_S for m in block_points)
 
 
 def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:

@@ -4,14 +4,13 @@ submitted under a second name keeps the first, a W curve off the grid is refused
 picked refined curve says it holds inferred points, and argparse refusals are one line."""
 import json
 import shutil
-import tomllib
 
 import pytest
 
 import store
 from sweeps.lookup import resolve_sweep
 
-from ..helpers import AVERAGED_SPEC, SIMULATE_SPEC, ditherlab
+from ..helpers import AVERAGED_SPEC, ditherlab
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -126,18 +125,6 @@ def test_argument_refusals_are_one_line(argv, tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("ditherlab") and \
         "usage:" not in proc.stderr, proc.stderr
-
-
-def test_plan_of_fewer_blocks_than_workers_is_not_shared_among_them():
-    """One block is one worker's: a one-point sweep on two workers takes a whole point's
-    time, not half of it (the estimate was n_points * per_point / workers)."""
-    from sweeps.estimates.time_estimate import TASK_OVERHEAD_S, estimate
-    from sweeps.spec import parse_spec
-
-    one = tomllib.loads(SIMULATE_SPEC)
-    one["grid"] = {"W": [0.3], "omega": [300.0], "v_ref": [0.4], "v_d": [0.1]}
-    est = estimate(parse_spec(one), "draft", workers=2)
-    assert est.wall_s == pytest.approx(est.per_point_s + TASK_OVERHEAD_S, rel=1e-12)
 
 
 @pytest.mark.long
