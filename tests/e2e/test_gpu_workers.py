@@ -47,7 +47,8 @@ def _submit(tmp_path, address, store_dir):
                           env=_env(tmp_path / "submitter.log", gpu=False))
 
 
-def test_the_gpu_workers_compute_every_block_and_the_cube_is_the_cpus(scheduler, tmp_path):  # noqa: F811
+def test_the_gpu_workers_compute_every_block_and_the_cube_is_the_cpus(  # noqa: F811
+        scheduler, tmp_path):
     address, start, _ = scheduler
     gpu_log, cpu_log = tmp_path / "gpu-worker.log", tmp_path / "cpu-worker.log"
     start(_env(cpu_log, gpu=False), 0)

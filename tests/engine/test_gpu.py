@@ -5,10 +5,10 @@
   point, the per-thread settings record and scratch, the output and counter columns. In the
   simulator the engine's functions run as their CPU machine code, so the GPU path must equal
   the CPU block kernel bit for bit; on a GPU (its own exp and fused multiply-adds) the
-  promise is the accuracy level's (scripts/bench_gpu.py compares there).
+  promise is the accuracy level's (scripts/gpu_check.py --run and bench_gpu.py compare there).
 - The scratch a GPU thread allocates (Stepper.shapes) mirrors the CPU's ``alloc()``.
-- No GPU: ``Settings(device="cuda")`` is one clear error; the Rosenbrock solver and the analysis paths
-  say they stay on the CPU.
+- No GPU: ``Settings(device="cuda")`` is one clear error; the Rosenbrock solver and the
+  analysis paths say they stay on the CPU.
 
 The device build's type check (PTX for a Hopper GPU, no GPU needed but the CUDA compiler)
 is scripts/gpu_check.py, run where the ``gpu`` extra is installed.
