@@ -17,6 +17,10 @@ from tests.engine.common import ALL, scene
 
 P_SHORT = P.pack(t_end=0.5, t_transient=0.1)
 POINTS = np.array([[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.4, 0.01]])
+# the scene of a default draft LuGre sweep with square dither, as a plan makes it
+# (tests/sweeps/run/test_fixed_costs.py's): the quick tests below share its kernels with that
+# sweep instead of compiling the all-output scene (24 s of the quick set's 3 minutes)
+SWEPT = Scene.from_params(P_SHORT, dither="square-velocity", outputs=("v_mean", "F_mean"))
 
 
 @pytest.mark.long
@@ -40,12 +44,13 @@ def test_block_contract_and_point_overrides():
 
 
 def test_bad_points_get_a_status_not_an_exception():
+    sc = SWEPT
     pts = POINTS.copy()
     pts[1, 3] = np.nan                               # vd = NaN: sigma1(u) is NaN
-    res = run_block(scene(), pts, P_SHORT)
+    res = run_block(sc, pts, P_SHORT)
     assert res.status.tolist() == [S.OK, S.NON_FINITE, S.OK]
     assert np.isnan(res.outputs["v_mean"][1]) and np.isfinite(res.outputs["v_mean"][0])
-    failed = run_block(scene(), POINTS, P_SHORT, Settings(max_steps=20))
+    failed = run_block(sc, POINTS, P_SHORT, Settings(max_steps=20))
     assert np.all(failed.status == S.FAILED) and np.all(failed.steps + failed.rejected <= 20)
 
 
@@ -73,13 +78,13 @@ def test_analysis_paths_dispatch_lazily(monkeypatch):
 
 def test_recording_and_decimation():
     p = P.pack(t_end=0.2, W=0.3, omega=200.0, v_ref=0.4)
-    full = simulate(scene(), p, record=True)
-    every3 = simulate(scene(), p, record=True, record_every=3)
+    full = simulate(SWEPT, p, record=True)
+    every3 = simulate(SWEPT, p, record=True, record_every=3)
     assert len(full.t) == full.steps and full.t[-1] == 0.2
     assert np.array_equal(every3.t, full.t[2::3]) and np.array_equal(every3.y, full.y[2::3])
-    short = simulate(scene(), p, record=True, max_records=5)
+    short = simulate(SWEPT, p, record=True, max_records=5)
     assert short.truncated and len(short.t) == 5
-    assert simulate(scene(), p).t is None
+    assert simulate(SWEPT, p).t is None
 
 
 @pytest.mark.parametrize("call,match", [
