@@ -23,6 +23,7 @@ import numpy as np
 
 from engine import params as P
 
+from ..errors import RefusedError
 from ..planning.plan import Plan, make_plan
 from ..spec.models import LEVELS, Spec
 from ..workers.task import compute_block, warm_up
@@ -85,7 +86,12 @@ def _gpu_estimate(plan: Plan, level: str) -> Estimate:
         run_block(plan.scene, points, p, settings)
         return (time.perf_counter() - t0) * scale
 
-    launch(pts[:1])   # compiles the kernel (its time is not the sweep's: it is cached)
+    try:
+        launch(pts[:1])   # compiles the kernel (its time is not the sweep's)
+    except ValueError as exc:   # engine.gpu.run: a kernel numba.cuda cannot compile (a
+        if not str(exc).startswith("device cuda:"):   # brought law's np.exp): its one
+            raise                                       # line, not an internal error
+        raise RefusedError(str(exc)) from None
     latency = launch(pts)
     full = max(len(b) for b in plan.blocks)
     tiled = np.resize(pts, (min(full, GPU_SIM_POINTS if gpu.simulated() else full), 4))
