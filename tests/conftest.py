@@ -16,9 +16,9 @@
 
 Order: ``scripts/test`` runs the tests on one pytest-xdist worker per core, a module's tests
 on one worker (``--dist loadscope``), handing out modules in collection order. The costliest
-modules (:data:`COSTLIEST`), then the quick set's costliest (:data:`QUICK_COSTLIEST`), then
-those with a long test are collected first, so that a worker never starts a 6-minute module
-when the rest of the suite is done (the longest-first rule of scheduling).
+modules (:data:`COSTLIEST`) and then those with a long test are collected first, so that a
+worker never starts a 6-minute module when the rest of the suite is done (the longest-first
+rule of scheduling).
 """
 from __future__ import annotations
 
@@ -37,20 +37,13 @@ HERE = pathlib.Path(__file__).parent
 # batch-started workers 76 s, two processes filling one kernel cache 48 s, the README 47 s
 COSTLIEST = ("accuracy/test_promises.py", "e2e/test_gallery_figures.py", "e2e/test_hpc.py",
              "engine/test_disk_cache.py", "test_readme.py")
-# the quick set's (`scripts/test -q` on a fresh clone, cold kernel cache, 2026-11-27): 39,
-# 31, 29, 20, 20, 19 and 18 s of its 327 s; collected last they left one worker alone at the end
-QUICK_COSTLIEST = ("engine/test_engine_contact_switches.py", "hard/test_hard_cases.py",
-                   "sweeps/web/test_web_pages.py", "e2e/test_cli_e2e.py",
-                   "engine/test_models_brought.py", "engine/test_engine_batch_api.py",
-                   "sweeps/web/test_web_security.py")
 
 
 def _cost_rank(item) -> tuple[int, int]:
     where = pathlib.Path(str(item.fspath)).relative_to(HERE).as_posix()
-    for rank, modules in enumerate((COSTLIEST, QUICK_COSTLIEST)):
-        if where in modules:
-            return rank, modules.index(where)
-    return 2, 0
+    if where in COSTLIEST:
+        return 0, COSTLIEST.index(where)
+    return 1, 0
 
 
 def pytest_collection_modifyitems(config, items):
