@@ -113,7 +113,7 @@ def test_after_a_ctrl_c_the_command_prints_no_finalizer_tracebacks(monkeypatch, 
     """A Ctrl-C that cut an object short in its making (an h5netcdf file in its __init__)
     left finalizers failing at exit: "Exception ignored in ... Traceback" below the one line
     (tests/e2e/test_faults.py under load). After the interrupt's line, the command drops
-    those reports; a command that was not interrupted keeps them."""
+    those reports (the hook is replaced only on that path: sweeps.cli.main)."""
     import importlib
 
     cli = importlib.import_module("sweeps.cli.main")   # (sweeps.cli.main is also a function)
