@@ -108,15 +108,16 @@ class Catalogue(LeaseMixin):
             con.execute("PRAGMA journal_mode=WAL")
             con.execute(SCHEMA)
             con.execute(SERVERS)
-            columns = {row["name"] for row in con.execute("PRAGMA table_info(sweeps)")}
-            for name, decl in ADDED_COLUMNS:   # a catalogue written before they existed
-                if name in columns:
-                    continue
-                try:
-                    con.execute(f"ALTER TABLE sweeps ADD COLUMN {name} {decl}")
-                except sqlite3.OperationalError as err:   # another process added it first
-                    if "duplicate column" not in str(err):
-                        raise
+            for table, added in ADDED_COLUMNS.items():   # a catalogue written before them
+                columns = {row["name"] for row in con.execute(f"PRAGMA table_info({table})")}
+                for name, decl in added:
+                    if name in columns:
+                        continue
+                    try:
+                        con.execute(f"ALTER TABLE {table} ADD COLUMN {name} {decl}")
+                    except sqlite3.OperationalError as err:   # another process added it first
+                        if "duplicate column" not in str(err):
+                            raise
 
     def __repr__(self) -> str:
         return f"Catalogue({str(self.root)!r})"

@@ -34,8 +34,8 @@ CREATE TABLE IF NOT EXISTS sweeps (
     updated       TEXT NOT NULL,
     owner         TEXT NOT NULL DEFAULT ''
 )"""
-# columns added after the first catalogues were written: old ones gain them on open
-ADDED_COLUMNS = (
+# columns added after the first catalogues were written, per table: old ones gain them on open
+ADDED_COLUMNS = {"sweeps": (
     ("owner", "TEXT NOT NULL DEFAULT ''"),           # host:pid of the lease holder
     ("heartbeat", "REAL NOT NULL DEFAULT 0"),        # its last sign of life (epoch s)
     ("cancel_requested", "INTEGER NOT NULL DEFAULT 0"),
@@ -44,7 +44,9 @@ ADDED_COLUMNS = (
     ("queued_at", "TEXT NOT NULL DEFAULT ''"),       # serve runs the oldest first
     ("engine_fingerprint", "TEXT NOT NULL DEFAULT ''"),   # engine that computes it ('' unknown)
     ("aliases", "TEXT NOT NULL DEFAULT ''"),         # earlier names, each ended by a newline
-)
+), "servers": (
+    ("device", "TEXT NOT NULL DEFAULT 'cpu'"),       # cuda: it runs the GPU's sweeps too
+)}
 SERVERS = """
 CREATE TABLE IF NOT EXISTS servers (
     owner     TEXT PRIMARY KEY,

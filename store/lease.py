@@ -116,13 +116,21 @@ class LeaseMixin:
                 return False, row
             return True, self._take(con, sweep_id, owner, row)
 
-    def claim_next(self, owner: str | None = None) -> dict | None:
+    def claim_next(self, owner: str | None = None,
+                   devices: tuple[str, ...] | None = None) -> dict | None:
         """For ``serve``: the oldest ``queued`` sweep, now ``running`` under ``owner``;
-        ``None`` when the queue is empty. Two servers never claim the same sweep."""
+        ``None`` when the queue is empty. Two servers never claim the same sweep.
+        ``devices``: only sweeps whose spec's ``device`` is one of them (a serve without a
+        GPU leaves the GPU's sweeps queued for one that has it)."""
         owner = owner or owner_tag()
+        where, args = "state = 'queued'", ()
+        if devices is not None:
+            where += (" AND COALESCE(json_extract(spec_json, '$.device'), 'cpu') IN "
+                      f"({', '.join('?' * len(devices))})")
+            args = tuple(devices)
         with self._transaction() as con:
-            row = con.execute("SELECT * FROM sweeps WHERE state = 'queued' "
-                              "ORDER BY queued_at, created, sweep_id LIMIT 1").fetchone()
+            row = con.execute(f"SELECT * FROM sweeps WHERE {where} "
+                              "ORDER BY queued_at, created, sweep_id LIMIT 1", args).fetchone()
             return None if row is None else self._take(con, row["sweep_id"], owner, dict(row))
 
     def beat(self, sweep_id: str, owner: str | None = None, **counts) -> bool:
@@ -218,15 +226,18 @@ class LeaseMixin:
 
     # --- serve processes ---------------------------------------------------------------
 
-    def server_beat(self, owner: str | None = None, sweep_id: str = "", cluster: str = "") -> None:
-        """Register or refresh a ``serve`` process (and the sweep it is running)."""
+    def server_beat(self, owner: str | None = None, sweep_id: str = "", cluster: str = "",
+                    device: str = "cpu") -> None:
+        """Register or refresh a ``serve`` process (the sweep it is running, and ``device``:
+        ``cuda`` when it also runs the sweeps queued for the GPU)."""
         with self._connection() as con:
             con.execute(
-                "INSERT INTO servers (owner, started, heartbeat, sweep_id, cluster) "
-                "VALUES (?, ?, ?, ?, ?) ON CONFLICT(owner) DO UPDATE SET "
+                "INSERT INTO servers (owner, started, heartbeat, sweep_id, cluster, device) "
+                "VALUES (?, ?, ?, ?, ?, ?) ON CONFLICT(owner) DO UPDATE SET "
                 "heartbeat = excluded.heartbeat, sweep_id = excluded.sweep_id, "
-                "cluster = excluded.cluster",
-                (owner or owner_tag(), utc_now(self.clock), time.time(), sweep_id, cluster))
+                "cluster = excluded.cluster, device = excluded.device",
+                (owner or owner_tag(), utc_now(self.clock), time.time(), sweep_id, cluster,
+                 device))
 
     def server_gone(self, owner: str | None = None) -> None:
         with self._connection() as con:

@@ -94,7 +94,7 @@ def store_summary(root: Path, cache: dict | None = None) -> dict:
     cat = catalogue(root)
     rows = cat.list()
     sweeps = [sweep_summary(r, cat.live_state(r), root, cache) for r in rows]
-    servers = [{k: s[k] for k in ("owner", "sweep_id", "cluster", "started")}
+    servers = [{k: s[k] for k in ("owner", "sweep_id", "cluster", "device", "started")}
                for s in cat.servers()]
     return {"store": str(root), "sweeps": sweeps, "servers": servers}
 

@@ -45,6 +45,8 @@ from .run.progress import ATTACH_POLL_S, clock_text, progress_text
 log = logging.getLogger("ditherlab")
 
 SERVE_POLL_S = 1.0         # an idle serve looks for queued sweeps this often
+# the spec devices whose queued sweeps a serve runs, by the serve's own --device
+SERVED = {"cpu": ("cpu",), "cuda": ("cpu", "cuda")}
 
 
 # --- submit --detach -------------------------------------------------------------------
@@ -117,15 +119,22 @@ class _Signals:
         return False
 
 
-def serve(store_root, compute=None, *, poll_s: float = SERVE_POLL_S,
+def serve(store_root, compute=None, *, device: str = "cpu", poll_s: float = SERVE_POLL_S,
           idle_exit_s: float | None = None, progress: bool = False, say=None) -> int:
     """Run queued sweeps of the store, oldest first, one at a time, on ``compute`` (a
     :class:`sweeps.workers.compute.Compute`, default a local cluster of 2 workers, started
     for the first simulated sweep and kept between sweeps) until SIGTERM/SIGINT (or, with
-    ``idle_exit_s``, until the queue has been empty that long). Returns 0."""
+    ``idle_exit_s``, until the queue has been empty that long). Returns 0.
+
+    ``device``: ``cpu`` leaves the sweeps queued for the GPU (spec ``device = "cuda"``) to a
+    serve with one; ``cuda`` runs them too, on this machine's GPU or the scheduler's GPU
+    workers, and is refused at once (a RefusedError) where there is no GPU to run them."""
     from .workers.compute import Compute
 
-    server = _Server(store_root, compute or Compute(), progress,
+    compute = compute or Compute()
+    if device == "cuda":
+        compute.check_gpu()   # no GPU here, or batch jobs: one line before anything starts
+    server = _Server(store_root, compute, device, progress,
                      say or (lambda text: print(text, file=sys.stderr, flush=True)))
     server.start()
     try:
@@ -149,10 +158,11 @@ class _Server:
     queued sweep, :meth:`plan_of` it, :meth:`run` it on the kept compute), :meth:`shut_down`
     (the claimed sweep back to the queue, the cluster closed)."""
 
-    def __init__(self, store_root, compute, progress: bool, say):
+    def __init__(self, store_root, compute, device: str, progress: bool, say):
         self.root = store.layout.check_store(store_root, write=True)
         self.catalogue, self.me = Catalogue(self.root), owner_tag()
         self.compute, self.progress, self.say = compute, progress, say
+        self.device, self.devices = device, SERVED[device]
         self.stop, self.beating = threading.Event(), threading.Event()
         self.current = ""   # the sweep claimed, until its run ends
 
@@ -160,11 +170,14 @@ class _Server:
         """serve's own heartbeat, on a thread (also while a sweep runs), and its banner."""
         self.beat()
         threading.Thread(target=self._beat_loop, daemon=True, name="ditherlab-serve-beat").start()
-        self.say(f"serve {self.me}: store {self.root}, {self.compute.where}; waiting for "
-                 "queued sweeps (SIGTERM or Ctrl-C stops)")
+        gpu = {"cuda": "; also the sweeps queued for the GPU",
+               "cpu": "; the sweeps queued for the GPU are left to `serve --device cuda`"}
+        self.say(f"serve {self.me}: store {self.root}, {self.compute.where}{gpu[self.device]}; "
+                 "waiting for queued sweeps (SIGTERM or Ctrl-C stops)")
 
     def beat(self) -> None:
-        self.catalogue.server_beat(self.me, sweep_id=self.current, cluster=self.compute.where)
+        self.catalogue.server_beat(self.me, sweep_id=self.current, cluster=self.compute.where,
+                                   device=self.device)
 
     def _beat_loop(self) -> None:
         while not self.beating.wait(HEARTBEAT_S):
@@ -175,7 +188,7 @@ class _Server:
 
     def next(self) -> bool:
         """Claim and run the oldest queued sweep; False when none is queued."""
-        row = self.catalogue.claim_next(self.me)
+        row = self.catalogue.claim_next(self.me, devices=self.devices)
         if row is None:
             return False
         self.current = row["sweep_id"]
@@ -252,20 +265,34 @@ class _Server:
 
 
 def queue_hint(catalogue: Catalogue, rows: list[dict]) -> str | None:
-    """A line for ``status``: who serves this store, or that queued sweeps wait for one."""
-    servers = catalogue.servers()
-    queued = sum(1 for r in rows if r["state"] == "queued")
+    """A line for ``status``: who serves this store, and the queued sweeps no serve
+    running on it will take (:func:`unserved`)."""
+    servers, parts = catalogue.servers(), []
     if servers:
-        parts = []
-        for s in servers:
-            doing = f"running {s['sweep_id']}" if s["sweep_id"] else "idle"
-            parts.append(f"{s['owner']} ({doing}, {s['cluster']})")
-        return "serve: " + "; ".join(parts)
-    if queued:
-        return (f"{queued} queued sweep(s) wait for `ditherlab serve` (no serve process is "
-                "running on this store)")
+        parts.append("serve: " + "; ".join(
+            f"{s['owner']} ({'running ' + s['sweep_id'] if s['sweep_id'] else 'idle'}, "
+            f"{s['cluster']}{', and the GPU sweeps' if s.get('device') == 'cuda' else ''})"
+            for s in servers))
+    waiting = unserved(servers, [r for r in rows if r["state"] == "queued"])
+    return "; ".join(parts + ([waiting] if waiting else [])) or None
+
+
+def unserved(servers: list[dict], queued: list[dict]) -> str | None:
+    """What the ``queued`` rows wait for that none of the live ``servers`` gives: any
+    serve at all, or one started with ``--device cuda`` for the sweeps queued for the GPU."""
+    devices = {d for s in servers for d in SERVED.get(s.get("device") or "cpu", ("cpu",))}
+    asks = [json.loads(r["spec_json"]).get("device", "cpu") for r in queued]
+    if not servers and asks:
+        return (f"{len(asks)} queued sweep(s) wait for `ditherlab serve` (no serve process is "
+                "running on this store)" + ("; those queued for the GPU for `ditherlab serve "
+                                            "--device cuda`" if "cuda" in asks else ""))
+    gpu = sum(1 for a in asks if a not in devices)
+    if gpu:
+        return (f"{gpu} sweep(s) queued for the GPU wait for `ditherlab serve --device cuda` "
+                "(no serve on this store runs the GPU's sweeps)")
     return None
 
 
 # clock_text, progress_text: re-exported for sweeps.cli (status)
-__all__ = ["cancel", "clock_text", "enqueue", "progress_text", "queue_hint", "serve"]
+__all__ = ["cancel", "clock_text", "enqueue", "progress_text", "queue_hint", "serve",
+           "unserved"]

@@ -69,6 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("serve", parents=[common],
                        help="run queued sweeps, oldest first, until SIGTERM or Ctrl-C")
     _cluster_options(p)
+    p.add_argument("--device", choices=("cpu", "cuda"), default="cpu", help="cuda: also run "
+                   "the sweeps queued for the GPU (default: leave them to a serve with one)")
     p.set_defaults(func=cmd_serve)
 
     p = sub.add_parser("cancel", parents=[common],

@@ -76,15 +76,17 @@ def _submit_detached(plan, root: Path) -> int:
     """``submit --detach``: queue the sweep for ``ditherlab serve`` and return at once."""
     import store
 
-    from ..service import enqueue
+    from ..service import enqueue, unserved
 
     row = enqueue(plan, root)
     cat = store.Catalogue(root)
     state = cat.live_state(row)
     if state == "queued":
         print(f"{row['sweep_id']}: queued")
-        if not cat.servers():
-            print(f"ditherlab: no `ditherlab serve` is running on store {root}; start one to "
+        if unserved(cat.servers(), [row]):
+            wanted = "`ditherlab serve --device cuda`" if plan.spec.device == "cuda" \
+                else "`ditherlab serve`"
+            print(f"ditherlab: no {wanted} is running on store {root}; start one to "
                   "run the queue", file=sys.stderr)
     elif state == "running":
         print(f"{row['sweep_id']}: running in {row['owner']} (`ditherlab status "
@@ -97,7 +99,7 @@ def _submit_detached(plan, root: Path) -> int:
 def cmd_serve(args) -> int:
     from ..service import serve
 
-    return serve(store_root(args.store), _compute(args), progress=False)
+    return serve(store_root(args.store), _compute(args), device=args.device, progress=False)
 
 
 def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:

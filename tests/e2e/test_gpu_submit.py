@@ -8,6 +8,8 @@
   scripts/bench_gpu.py compares).
 - What stays on the CPU says so; batch jobs with ``--device cuda`` are refused in one line
   (a scheduler's GPU workers: tests/e2e/test_gpu_workers.py).
+- ``serve`` leaves the sweeps queued for the GPU to ``serve --device cuda``, which runs them
+  (and is one line, exit 2, without a GPU).
 """
 import json
 import os
@@ -16,7 +18,10 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from ..helpers import ditherlab
+import store as store_pkg
+
+from ..helpers import AVERAGED_SPEC, ditherlab, wait_for
+from .test_service import Serve
 
 pytestmark = pytest.mark.subprocess
 
@@ -119,3 +124,49 @@ def test_a_simulated_gpu_sweep_equals_the_cpu_sweep(spec, tmp_path):
         for name in g.data_vars:
             if name != "cost_s":
                 assert np.array_equal(g[name].values, c[name].values, equal_nan=True), name
+
+
+@pytest.mark.long
+def test_serve_leaves_the_gpus_sweeps_to_serve_device_cuda(spec, tmp_path):
+    root, plain, sim = tmp_path / "store", _no_sim(), _no_sim() | {"NUMBA_ENABLE_CUDASIM": "1"}
+    gpu = ditherlab("submit", spec, "--device", "cuda", "--detach", store=root, env=plain,
+                    check=True)   # queued without a GPU here: a serve with one may run it
+    gpu_id = gpu.stdout.split(":")[0]
+    assert "no `ditherlab serve --device cuda` is running" in gpu.stderr, gpu.stderr
+    avg = tmp_path / "avg.toml"
+    avg.write_text(AVERAGED_SPEC)   # queued after the GPU's: serve takes the oldest it runs
+    avg_id = ditherlab("submit", avg, "--detach", store=root, env=plain,
+                       check=True).stdout.split(":")[0]
+
+    def state(sweep_id):
+        return store_pkg.Catalogue(root).get(sweep_id)["state"]
+
+    serve = Serve(root, tmp_path, plain)
+    try:
+        wait_for(lambda: state(avg_id) == "done", "the CPU's sweep done", 300,
+                 process=serve.proc)
+        assert state(gpu_id) == "queued"   # passed over, not failed
+        listing = ditherlab("status", store=root, env=plain, check=True).stdout
+        assert "1 sweep(s) queued for the GPU wait for `ditherlab serve --device cuda`" \
+            in listing, listing
+        assert serve.stop() == 0, serve.text()
+    finally:
+        serve.kill()
+    assert "left to `serve --device cuda`" in serve.text()
+
+    refused = ditherlab("serve", "--device", "cuda", store=root, env=plain)
+    assert refused.returncode == 2, refused.stderr
+    assert len(refused.stderr.strip().splitlines()) == 1 and "no CUDA GPU here" in refused.stderr
+    assert store_pkg.Catalogue(root).servers() == [] and state(gpu_id) == "queued"
+
+    serve = Serve(root, tmp_path, sim, name="serve-cuda", options=("--device", "cuda"))
+    try:
+        wait_for(lambda: state(gpu_id) == "done", "the GPU's sweep done", 300,
+                 process=serve.proc)
+        assert serve.stop() == 0, serve.text()
+    finally:
+        serve.kill()
+    cube = root / gpu_id / "cube.nc"
+    with xr.open_dataset(cube) as ds:
+        assert json.loads(ds.attrs["engine_settings"])["device"] == "cuda"
+        assert (ds["status"] == 0).all()

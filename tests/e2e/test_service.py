@@ -68,11 +68,11 @@ def _block_keys(spec):
 class Serve:
     """A ``ditherlab serve`` subprocess in its own session (its local cluster with it)."""
 
-    def __init__(self, root, tmp_path, env, name="serve"):
+    def __init__(self, root, tmp_path, env, name="serve", options=()):
         self.log = tmp_path / f"{name}.log"
         with open(self.log, "w") as out:
             self.proc = subprocess.Popen(
-                [str(BIN), "serve", "--store", str(root), "--workers", "2"],
+                [str(BIN), "serve", "--store", str(root), "--workers", "2", *options],
                 stdout=out, stderr=subprocess.STDOUT, env=env, start_new_session=True)
 
     def stop(self, sig=signal.SIGTERM, timeout=120) -> int:

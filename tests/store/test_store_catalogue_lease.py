@@ -120,6 +120,21 @@ def test_servers_table(cat):
     assert [s["owner"] for s in cat.servers()] == ["elsewhere:1"]
 
 
+def test_a_serve_claims_only_the_devices_it_runs(tmp_path):
+    """``serve`` without a GPU leaves the sweeps queued for one (spec ``device = "cuda"``);
+    a spec without the key (written before it existed) is the CPU's."""
+    cat = Catalogue(tmp_path, clock=ticking_clock())
+    for sid, spec in (("gpu", '{"device": "cuda"}'), ("old", "{}"), ("cpu", '{"device": "cpu"}')):
+        cat.register(sid, sid, spec, 1, 1, tmp_path / sid)
+    me = owner_tag()
+    assert [cat.claim_next(me, devices=("cpu",))["sweep_id"] for _ in range(2)] == ["old", "cpu"]
+    assert cat.claim_next(me, devices=("cpu",)) is None
+    assert cat.get("gpu")["state"] == "queued"
+    assert cat.claim_next(me, devices=("cpu", "cuda"))["sweep_id"] == "gpu"
+    cat.server_beat(cluster="local", device="cuda")
+    assert [s["device"] for s in cat.servers()] == ["cuda"]
+
+
 CLAIMER = """
 import sys
 sys.path.insert(0, {root!r})
@@ -175,6 +190,8 @@ def test_old_catalogue_gains_the_service_columns(tmp_path):
     row = cat.get("old")
     for column in ("owner", "heartbeat", "cancel_requested", "run_started", "queued_at"):
         assert column in row
+    cat.server_beat(cluster="local")   # the servers table of an old catalogue gains 'device'
+    assert [s["device"] for s in cat.servers()] == ["cpu"]
     assert cat.live_state(row) == "running"   # no owner recorded: trusted as before
     assert cat.acquire("old", "elsewhere:1")[0] is True
     assert Catalogue(tmp_path).get("old")["owner"] == "elsewhere:1"   # reopening is a no-op
