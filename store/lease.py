@@ -13,6 +13,7 @@ catalogue's ``_connection()`` and ``_query()``.
 """
 from __future__ import annotations
 
+import json
 import os
 import socket
 import time
@@ -46,6 +47,17 @@ def _owner_alive(owner: str) -> bool:
             return f.read().rpartition(")")[2].split()[0] != "Z"
     except (OSError, IndexError):
         return True
+
+
+def queued_device(spec_json: str) -> str:
+    """The device a queued sweep's spec asks for (``cpu`` without the key). A spec that
+    does not parse reads ``cpu``: a serve claims it, and its planning fails the row with
+    the reason, as before devices were told apart (never a serve stopped by one bad row)."""
+    try:
+        spec = json.loads(spec_json)
+    except ValueError:
+        return "cpu"
+    return str(spec.get("device", "cpu")) if isinstance(spec, dict) else "cpu"
 
 
 class LeaseMixin:
@@ -123,14 +135,11 @@ class LeaseMixin:
         ``devices``: only sweeps whose spec's ``device`` is one of them (a serve without a
         GPU leaves the GPU's sweeps queued for one that has it)."""
         owner = owner or owner_tag()
-        where, args = "state = 'queued'", ()
-        if devices is not None:
-            where += (" AND COALESCE(json_extract(spec_json, '$.device'), 'cpu') IN "
-                      f"({', '.join('?' * len(devices))})")
-            args = tuple(devices)
         with self._transaction() as con:
-            row = con.execute(f"SELECT * FROM sweeps WHERE {where} "
-                              "ORDER BY queued_at, created, sweep_id LIMIT 1", args).fetchone()
+            queued = con.execute("SELECT * FROM sweeps WHERE state = 'queued' "
+                                 "ORDER BY queued_at, created, sweep_id").fetchall()
+            row = next((r for r in queued if devices is None
+                        or queued_device(r["spec_json"]) in devices), None)
             return None if row is None else self._take(con, row["sweep_id"], owner, dict(row))
 
     def beat(self, sweep_id: str, owner: str | None = None, **counts) -> bool:

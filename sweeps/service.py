@@ -38,7 +38,7 @@ import time
 
 import store
 from store.catalogue import Catalogue
-from store.lease import HEARTBEAT_S, owner_tag
+from store.lease import HEARTBEAT_S, owner_tag, queued_device
 
 from .run.progress import ATTACH_POLL_S, clock_text, progress_text
 
@@ -281,7 +281,7 @@ def unserved(servers: list[dict], queued: list[dict]) -> str | None:
     """What the ``queued`` rows wait for that none of the live ``servers`` gives: any
     serve at all, or one started with ``--device cuda`` for the sweeps queued for the GPU."""
     devices = {d for s in servers for d in SERVED.get(s.get("device") or "cpu", ("cpu",))}
-    asks = [json.loads(r["spec_json"]).get("device", "cpu") for r in queued]
+    asks = [queued_device(r["spec_json"]) for r in queued]
     if not servers and asks:
         return (f"{len(asks)} queued sweep(s) wait for `ditherlab serve` (no serve process is "
                 "running on this store)" + ("; those queued for the GPU for `ditherlab serve "
