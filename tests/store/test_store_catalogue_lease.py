@@ -135,6 +135,16 @@ def test_a_serve_claims_only_the_devices_it_runs(tmp_path):
     assert [s["device"] for s in cat.servers()] == ["cuda"]
 
 
+def test_a_queued_spec_that_does_not_parse_is_claimed_not_a_stopped_queue(tmp_path):
+    """A damaged row is handed to serve, whose planning fails it with its reason; with
+    SQLite's json_extract every claim raised 'malformed JSON' and the queue stood still."""
+    cat = Catalogue(tmp_path, clock=ticking_clock())
+    cat.register("bad", "bad", "not json", 1, 1, tmp_path / "bad")
+    cat.register("next", "next", '{"device": "cpu"}', 1, 1, tmp_path / "next")
+    assert [cat.claim_next(owner_tag(), devices=("cpu",))["sweep_id"]
+            for _ in range(2)] == ["bad", "next"]
+
+
 CLAIMER = """
 import sys
 sys.path.insert(0, {root!r})
