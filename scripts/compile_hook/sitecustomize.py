@@ -24,6 +24,17 @@ if os.environ.get("DITHERLAB_COMPILE_LOG"):
         event = None
 
     if event is not None:
+        def _scene_on_stack():
+            """The engine Scene being compiled for: the nearest caller's local ``scene``
+            (engine.api.simulate, engine.blocks.run_block), as its non-default fields."""
+            frame = sys._getframe(2)
+            while frame is not None:
+                scene = frame.f_locals.get("scene")
+                if hasattr(scene, "outputs") and hasattr(scene, "integrator"):
+                    return repr(scene)
+                frame = frame.f_back
+            return None
+
         class _TopLevelCompiles(event.Listener):
             """Logs the outermost ``numba:compile`` events (nested ones are inside them)."""
 
@@ -42,7 +53,8 @@ if os.environ.get("DITHERLAB_COMPILE_LOG"):
                         "pid": os.getpid(), "argv": " ".join(sys.argv[:2])[-80:],
                         "function": f"{getattr(func, '__module__', '?')}."
                                     f"{getattr(func, '__qualname__', '?')}",
-                        "seconds": round(time.perf_counter() - t0, 3)}
+                        "seconds": round(time.perf_counter() - t0, 3),
+                        "scene": _scene_on_stack()}
                 with open(self.path, "a") as fh:   # one short line: appends do not interleave
                     fh.write(json.dumps(line) + "\n")
 

@@ -1,0 +1,80 @@
+"""Local workers are forked from a server that imported the engine once (issue 37;
+sweeps.workers.cluster.start_method), not spawned each on its own, where that gives them
+the environment they would have been spawned with; and nothing is left running when the
+process that started them is killed.
+
+Each case runs in a fresh Python, so what an earlier test started in the test process
+cannot decide the outcome."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+
+import psutil
+import pytest
+
+from ..helpers import wait_for
+
+pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
+
+WHAT_WORKERS_SEE = """
+import json, os, sys
+from sweeps.workers.cluster import dask_client
+
+
+def seen():
+    import os, sys
+    return {"forked": "sweeps.workers.preload" in sys.modules,
+            "mark": os.environ.get("DITHERLAB_TEST_MARK")}
+
+
+if __name__ == "__main__":
+    runs = []
+    for mark in sys.argv[1:]:
+        os.environ["DITHERLAB_TEST_MARK"] = mark
+        with dask_client(workers=2) as client:
+            runs.append(sorted(map(json.dumps, client.run(seen).values())))
+        print(json.dumps(runs[-1]), flush=True)
+    if os.environ.get("HOLD"):
+        sys.stdin.readline()
+"""
+
+
+def _script(tmp_path):
+    path = tmp_path / "workers.py"
+    path.write_text(WHAT_WORKERS_SEE)
+    return path
+
+
+def test_workers_forked_while_the_environment_holds_spawned_when_it_changed(tmp_path):
+    out = subprocess.run([sys.executable, str(_script(tmp_path)), "a", "a", "b"],
+                         capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-3000:]
+    runs = [[json.loads(w) for w in json.loads(line)] for line in out.stdout.splitlines()]
+    assert runs == [[{"forked": True, "mark": "a"}] * 2,      # the fork server's first two
+                    [{"forked": True, "mark": "a"}] * 2,      # ... its next two
+                    [{"forked": False, "mark": "b"}] * 2], out.stderr[-3000:]
+
+
+def test_kill_9_of_the_starter_leaves_no_worker_and_no_fork_server(tmp_path):
+    proc = subprocess.Popen([sys.executable, str(_script(tmp_path)), "a"], cwd=tmp_path,
+                            env={**os.environ, "HOLD": "1"}, stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        line = proc.stdout.readline()
+        assert json.loads(line) == [json.dumps({"forked": True, "mark": "a"})] * 2, \
+            proc.stderr.read()[-3000:] if not line else line
+        left = psutil.Process(proc.pid).children(recursive=True)
+        assert any("forkserver" in " ".join(p.cmdline()) for p in left), left
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=60)
+
+        def gone():
+            return not [p for p in left if p.is_running() and p.status() != "zombie"]
+        wait_for(gone, "the workers and the fork server to exit", seconds=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
