@@ -17,6 +17,9 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("log")
     ap.add_argument("--top", type=int, default=30)
+    ap.add_argument("--scenes", action="store_true",
+                    help="list each compiled scene with the test modules that compiled it "
+                         "(a scene one module alone needs is a compilation to share)")
     args = ap.parse_args(argv)
     with open(args.log) as fh:
         rows = [json.loads(line) for line in fh if line.strip()]
@@ -38,7 +41,23 @@ def main(argv=None) -> int:
     again = {k: v for k, v in by_kernel.items() if len(v) > 1}
     wasted = sum(sum(sorted(v)[:-1]) for v in again.values())
     print(f"kernels compiled more than once: {len(again)}, {wasted:.0f} s beyond the first")
+    if args.scenes:
+        print_scenes(rows)
     return 0
+
+
+def print_scenes(rows: list[dict]) -> None:
+    """Each scene's engine-kernel compile seconds and the modules whose tests compiled it
+    (the hook's ``scene``: the Scene on the compiling call's stack)."""
+    by_scene: dict[str, list] = defaultdict(list)
+    for r in rows:
+        if r["function"].startswith("engine.kernels."):
+            module = r["test"].split("::")[0].rsplit("/", 1)[-1] or "(no test)"
+            by_scene[r.get("scene") or "(scene not on the stack)"].append((module, r["seconds"]))
+    print(f"scenes compiled: {len(by_scene)}")
+    for scene, hits in sorted(by_scene.items(), key=lambda kv: -sum(s for _, s in kv[1])):
+        modules = ", ".join(sorted({m for m, _ in hits}))
+        print(f"  {sum(s for _, s in hits):6.1f} s  {modules}\n      {scene}")
 
 
 if __name__ == "__main__":

@@ -6,6 +6,7 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +15,8 @@ import pytest
 import sweeps
 from sweeps import cli
 from sweeps.errors import AmbiguousSweepError
+
+from ..helpers import SIMULATE_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -123,10 +126,11 @@ def test_run_sweep_takes_a_spec_and_an_existing_client(tmp_path):
     """A Spec object and a caller's dask.distributed.Client (left open after the run)."""
     from distributed import Client, LocalCluster
 
-    spec = sweeps.load_spec({"name": "eco-sim", "friction": "lugre", "dither": "none",
-                             "outputs": ["v_mean"], "accuracy": "draft",
+    # the scene of tests.helpers.SIMULATE_SPEC: its kernels are compiled once for both
+    spec = sweeps.load_spec({**tomllib.loads(SIMULATE_SPEC), "name": "eco-sim",
                              "time": {"t_end": 5.0, "t_transient": 1.0},
-                             "grid": {"v_ref": [0.2, 0.4]}})
+                             "grid": {"W": [0.0, 0.2], "omega": [300.0], "v_ref": [0.4],
+                                      "v_d": [0.1]}})
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                       dashboard_address=None) as cluster, Client(cluster) as client:
         res = sweeps.run_sweep(spec, store=tmp_path / "s", client=client, progress=False)

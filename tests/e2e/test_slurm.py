@@ -35,7 +35,7 @@ pytestmark = [pytest.mark.long, pytest.mark.slurm, pytest.mark.cluster,   # a re
               pytest.mark.subprocess, pytest.mark.timeout(2400)]
 
 SPEC = {"name": "slurm", "friction": "lugre", "dither": "square-velocity",
-        "outputs": ["F_mean", "v_mean", "v_slow_p2p"], "accuracy": "draft", "block_size": 1,
+        "outputs": ["v_mean", "v_slow_p2p", "F_mean"], "accuracy": "draft", "block_size": 1,
         "time": {"t_end": 4.0, "t_transient": 1.0},
         "grid": {"W": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7], "omega": [200.0],
                  "v_ref": [0.2]}}

@@ -2,10 +2,12 @@
 and GPU-capable method at least once, the effect flags off, a vector-parameter law and a
 brought model (docs/examples/mylab). Each case is a few points on a short tau, so the CUDA
 simulator (tests/engine/test_gpu.py) and the PTX compile check (scripts/gpu_check.py) can
-run them all. Compiling a scene's CPU kernels is what a case costs (~20-100 s on 2 cores):
-the two cases with every observable are the engine tests' own scenes (tests.engine.common,
-test_engine_batch_api), the GMS, Dahl and servo cases are test_models_reference's and
-test_models_servo's (one compilation in a CI run for both); the others ask for few outputs.
+run them all. Compiling a scene's CPU kernels is what a case costs (~15-45 s on 2 cores),
+so a case takes another test's scene wherever it can (one compilation in a CI run for both):
+the cases with every observable are test_engine_vs_scipy's scenes (tests.engine.common;
+:data:`SHARED`), the GMS, Dahl and servo cases test_models_reference's and
+test_models_servo's; the others ask for few outputs. ``scripts/compile_costs.py --scenes``
+lists which module compiles which scene.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ FEW = ("v_mean", "F_mean")
 GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
 SERVO_OUTS = ("hunt_amplitude", "hunt_period", "steady_error", "stick_fraction")
 SLIDER_POINTS = [[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.05, 0.01]]
+SLOW = {"slow_a": 1.7, "slow_omega": 0.3}   # the Sec. 7 slow force (test_engine_vs_scipy)
 
 # id: (friction, system, dither, integrator, own values, outputs, shared, points, t_end)
 CASES = {
@@ -31,8 +34,7 @@ CASES = {
                          SLIDER_POINTS, 0.5),
     "lugre-square-dopri5": ("lugre", "slider", "square-velocity", "dopri5", {}, ALL, {},
                             SLIDER_POINTS, 0.5),
-    "lugre-sine-velocity-dopri5": ("lugre", "slider", "sine-velocity", "dopri5", {},
-                                   ("v_slow_p2p", "stick_fraction", "alpha_hist"), {},
+    "lugre-sine-velocity-dopri5": ("lugre", "slider", "sine-velocity", "dopri5", {}, ALL, {},
                                    SLIDER_POINTS, 0.5),
     "lugre-sine-force-rk4": ("lugre", "slider", "sine-force", "rk4", {}, FEW, {},
                              SLIDER_POINTS, 0.5),
@@ -40,11 +42,10 @@ CASES = {
                                      ("v_mean", "F_mean", "stick_fraction"),
                                      {"sigma1": 0.0, "sigma2": 0.0, "fs": 1.0, "fc": 1.0},
                                      SLIDER_POINTS, 2.0),
-    "elastoplastic-square-dopri5": ("elastoplastic", "slider", "square-velocity", "dopri5",
-                                    {}, ("stick_fraction", "slip_fraction", "max_stick"), {},
-                                    SLIDER_POINTS, 0.5),
-    "stribeck-sine-velocity-dopri5": ("stribeck", "slider", "sine-velocity", "dopri5", {},
-                                      FEW, {}, SLIDER_POINTS, 0.5),
+    "elastoplastic-square-slow-dopri5": ("elastoplastic", "slider", "square-velocity",
+                                         "dopri5", {}, ALL, SLOW, SLIDER_POINTS, 0.5),
+    "stribeck-sine-force-dopri5": ("stribeck", "slider", "sine-force", "dopri5", {}, ALL, {},
+                                   SLIDER_POINTS, 0.5),
     "coulomb-square-rk4": ("coulomb", "slider", "square-velocity", "rk4", {},
                            ("v_mean", "stick_fraction"), {}, SLIDER_POINTS, 0.5),
     "dahl-sine-velocity-dopri5": ("dahl", "slider", "sine-velocity", "dopri5", {},
@@ -64,7 +65,12 @@ CASES = {
 }
 
 
-SHARED = {"lugre-square-rk4": {"integrator": "rk4"}, "lugre-square-dopri5": {}}
+# case -> tests.engine.common.scene's arguments: test_engine_vs_scipy's scenes (runtime
+# Stribeck exponents, every observable)
+SHARED = {"lugre-square-rk4": {"integrator": "rk4"}, "lugre-square-dopri5": {},
+          "lugre-sine-velocity-dopri5": {"dither": "sine-velocity"},
+          "elastoplastic-square-slow-dopri5": {"friction": "elastoplastic", "slow": True},
+          "stribeck-sine-force-dopri5": {"friction": "stribeck", "dither": "sine-force"}}
 
 
 def build(case_id: str):

@@ -18,6 +18,7 @@ from engine import params as P
 from engine.api import simulate
 from engine.kernels import make_config
 from engine.scene import Scene
+from tests.engine.common import scene as common_scene
 from engine.settings import Settings
 from engine.systems import make_system
 
@@ -50,6 +51,6 @@ def test_absolute_units_keep_one_atol_and_bad_units_are_refused():
     assert (cfg[0]["atol_i"][:3] == 3e-9).all()
     with pytest.raises(ValueError, match="atol_units"):
         Settings(atol_units="relative")
-    sim = simulate(Scene(outputs=("v_mean",)), P.pack(t_end=1.0, v_ref=0.4, W=0.4, omega=1e3),
-                   Settings(atol_units="natural"))
+    sim = simulate(common_scene(), P.pack(t_end=1.0, v_ref=0.4, W=0.4, omega=1e3),  # (the
+                   Settings(atol_units="natural"))   # engine tests' scene: compiled once for all)
     assert sim.status == 0

@@ -182,7 +182,9 @@ from sweeps.spec import parse_spec
 chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
                     "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
                              "v_ref": {{"start": 0.05, "stop": 1.0, "num": 9}}}}}})
-sim = parse_spec({{"name": "s", "friction": "lugre", "accuracy": "draft",
+sim = parse_spec({{"name": "s", "friction": "lugre", "accuracy": "draft",   # (the scene of
+                  "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction",  # the e2e
+                              "max_stick"],                       # SIMULATE_SPEC: one compile)
                   "time": {{"t_end": 2.0, "t_transient": 1.0}},
                   "grid": {{"W": [0.0, 0.5], "omega": [100.0], "v_ref": [0.1]}}}})
 before = set(sys.modules)
