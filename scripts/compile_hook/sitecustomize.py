@@ -9,7 +9,9 @@ compilation: the test running (``PYTEST_CURRENT_TEST``), the function, its secon
     DITHERLAB_CACHE_DIR=$(mktemp -d) DITHERLAB_COMPILE_LOG=/tmp/compiles.jsonl \
         PYTHONPATH=scripts/compile_hook scripts/test -m "long or not long"
 
-Without ``DITHERLAB_COMPILE_LOG`` it does nothing (not even import numba). Measured with it
+Without ``DITHERLAB_COMPILE_LOG`` it does nothing (not even import numba). With it, every
+process imports numba at start, so the two tests that check a command imports no numerics
+(tests/e2e/test_cli_ecosystem.py) fail under the hook, and only under it. Measured with it
 on 2026-11-27: 106 distinct engine kernels, 115 kernel compiles in a cold CI run.
 """
 import json
