@@ -35,7 +35,8 @@ pytestmark = [pytest.mark.cluster, pytest.mark.subprocess]   # what it starts (t
 # 16 points, 4 omegas: blocks of one omega each cost alike, and the re-runs (one level
 # finer, 12 of the 16 points) cost more or less than a block
 SPEC = {"name": "fixed-costs", "friction": "lugre", "dither": "square-velocity",
-        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
+        "method": "simulate", "accuracy": "draft",   # (the e2e SIMULATE_SPEC's scene)
+        "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"],
         "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
         "grid": {"W": [0.1, 0.3, 0.5, 0.7], "omega": [100.0, 300.0, 1000.0, 3000.0],
                  "v_ref": [0.4], "v_d": [0.1]}}

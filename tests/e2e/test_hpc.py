@@ -19,10 +19,10 @@ from ..helpers import wait_for
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # a dask scheduler and workers started by hand
 
-# the outputs of test_engine_batch_api's scene: its kernels are compiled once for both
+# the scene of tests/helpers.py's SIMULATE_SPEC: its kernels are compiled once for both
 SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity",
-        "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
-        "time": {"t_end": 4.0, "t_transient": 1.0},
+        "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"],
+        "accuracy": "draft", "time": {"t_end": 4.0, "t_transient": 1.0},
         "grid": {"W": [0.0, 0.3], "omega": [200.0], "v_ref": [0.2, 0.4]}}
 
 

@@ -17,10 +17,12 @@ from tests.engine.common import ALL, scene
 
 P_SHORT = P.pack(t_end=0.5, t_transient=0.1)
 POINTS = np.array([[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.4, 0.01]])
-# the scene of a default draft LuGre sweep with square dither, as a plan makes it
-# (tests/sweeps/run/test_fixed_costs.py's): the quick tests below share its kernels with that
-# sweep instead of compiling the all-output scene (24 s of the quick set's 3 minutes)
-SWEPT = Scene.from_params(P_SHORT, dither="square-velocity", outputs=("v_mean", "F_mean"))
+# the scene of a draft LuGre sweep with square dither, as a plan makes it (the e2e tests'
+# SIMULATE_SPEC, tests/helpers.py, and test_fixed_costs', test_hpc's, test_gpu_workers'): the
+# quick tests below share its kernels with those sweeps instead of compiling a scene of their
+# own (15-25 s of the quick set's 3 minutes each)
+SWEPT_OUTPUTS = ("v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick")
+SWEPT = Scene.from_params(P_SHORT, dither="square-velocity", outputs=SWEPT_OUTPUTS)
 
 
 @pytest.mark.long
