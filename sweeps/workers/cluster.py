@@ -88,7 +88,10 @@ def start_method() -> str:
     (:mod:`sweeps.workers.preload`); each worker is forked from it, ready. It lives until
     this process ends, so it keeps the environment and ``sys.path`` it started with: a
     later cluster whose process changed them (another ``DITHERLAB_CACHE_DIR``, a test's
-    gate, a path in front) gets spawned workers, which start from the present ones."""
+    gate, a path in front) gets spawned workers, which start from the present ones. The
+    server is started by the first worker's start, after dask's nanny has put its
+    pre-spawn environment (``OMP_NUM_THREADS``, ``MALLOC_TRIM_THRESHOLD_``,
+    ``PYTHONHASHSEED``) into this process's: started earlier, it would not pass that on."""
     global _forked_from
     import multiprocessing
 
