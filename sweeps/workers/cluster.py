@@ -52,8 +52,8 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
     # every socket on loopback (scheduler, its HTTP server, nannies, workers) unless the
     # user names the dashboard's address
     http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": LOOPBACK_HTTP}}
-    use_start_method()
-    with _sigint_ignored():   # workers are born ignoring Ctrl-C: their submitter stops them
+    # workers are born ignoring Ctrl-C (their submitter stops them), forked where they can be
+    with _sigint_ignored(), start_method_set():
         try:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address=dashboard,
@@ -104,11 +104,14 @@ def start_method() -> str:
     return "forkserver" if now == _forked_from else "spawn"
 
 
-def use_start_method() -> None:
-    """Set dask's start method for the local workers about to start (:func:`start_method`)."""
+def start_method_set():
+    """dask's start method for the local workers started inside (:func:`start_method`), set
+    for them alone. A LocalCluster the caller makes later in this process starts its
+    workers as dask would, with the environment of then (not forked from our server, whose
+    environment may be older), and a worker our nanny restarts later is spawned."""
     import dask
 
-    dask.config.set({"distributed.worker.multiprocessing-method": start_method()})
+    return dask.config.set({"distributed.worker.multiprocessing-method": start_method()})
 
 
 def _environment() -> tuple:

@@ -41,6 +41,23 @@ if __name__ == "__main__":
 """
 
 
+AFTER_OURS = """
+import json, os
+from distributed import Client, LocalCluster
+from sweeps.workers.cluster import dask_client
+
+if __name__ == "__main__":
+    with dask_client(workers=1):
+        pass
+    os.environ["DITHERLAB_TEST_MARK"] = "theirs"
+    with LocalCluster(n_workers=1, processes=True, dashboard_address=None) as cluster, \\
+            Client(cluster) as client:
+        print(json.dumps(list(client.run(
+            lambda: ("sweeps.workers.preload" in __import__("sys").modules,
+                     os.environ.get("DITHERLAB_TEST_MARK"))).values())))
+"""
+
+
 def _script(tmp_path):
     path = tmp_path / "workers.py"
     path.write_text(WHAT_WORKERS_SEE)
@@ -77,3 +94,14 @@ def test_kill_9_of_the_starter_leaves_no_worker_and_no_fork_server(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_a_cluster_the_caller_makes_afterwards_is_started_as_dask_would(tmp_path):
+    """The start method is set for our workers alone: a LocalCluster a script makes after a
+    sweep is spawned with its environment of then, not forked from our older server."""
+    path = tmp_path / "after.py"
+    path.write_text(AFTER_OURS)
+    out = subprocess.run([sys.executable, str(path)], capture_output=True, text=True,
+                         timeout=600, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [[False, "theirs"]]
