@@ -15,6 +15,7 @@ import signal
 import subprocess
 import sys
 import time
+import tomllib
 from datetime import datetime, timedelta, timezone
 from pathlib import Path
 
@@ -50,6 +51,10 @@ omega = [300.0, 1000.0]
 v_ref = [0.4]
 v_d = [0.1]
 """
+
+# its scene's outputs: tests that need a simulated scene take this one, so that one
+# compilation serves them all (docs/ARCHITECTURE.md, where the suite's time goes)
+SIMULATE_OUTPUTS = tuple(tomllib.loads(SIMULATE_SPEC)["outputs"])
 
 AVERAGED_SPEC = """
 name = "e2e-avg"

@@ -27,8 +27,8 @@ from sweeps.spec import load_spec, parse_spec
 from sweeps.workers.cluster import wait_for_stops
 from sweeps.workers.task import block_key
 
-from ..helpers import (BIN, RERUN_GATE_ENV, SIMULATE_SPEC, BlockGate, ditherlab, gated,
-                       wait_for)
+from ..helpers import (BIN, RERUN_GATE_ENV, SIMULATE_OUTPUTS, SIMULATE_SPEC, BlockGate,
+                       ditherlab, gated, wait_for)
 
 pytestmark = [pytest.mark.cluster, pytest.mark.subprocess]   # what it starts (tests/conftest.py)
 
@@ -36,7 +36,7 @@ pytestmark = [pytest.mark.cluster, pytest.mark.subprocess]   # what it starts (t
 # finer, 12 of the 16 points) cost more or less than a block
 SPEC = {"name": "fixed-costs", "friction": "lugre", "dither": "square-velocity",
         "method": "simulate", "accuracy": "draft",   # (the e2e SIMULATE_SPEC's scene)
-        "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"],
+        "outputs": list(SIMULATE_OUTPUTS),
         "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
         "grid": {"W": [0.1, 0.3, 0.5, 0.7], "omega": [100.0, 300.0, 1000.0, 3000.0],
                  "v_ref": [0.4], "v_d": [0.1]}}

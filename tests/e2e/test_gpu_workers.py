@@ -22,12 +22,13 @@ import xarray as xr
 import store
 import sweeps
 
+from ..helpers import SIMULATE_OUTPUTS
 from .test_foreign_worker import scheduler  # noqa: F401 -- the fixture
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 
 SPEC = {"name": "gpu-workers", "friction": "lugre", "dither": "square-velocity",
-        "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"],
+        "outputs": list(SIMULATE_OUTPUTS),
         "accuracy": "draft", "block_size": 2,
         "device": "cuda", "time": {"t_end": 0.5, "t_transient": 0.1},
         "grid": {"W": [0.0, 0.2, 0.4, 0.6], "omega": [200.0], "v_ref": [0.3]}}

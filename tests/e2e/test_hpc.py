@@ -14,14 +14,14 @@ import pytest
 
 import sweeps
 
-from ..helpers import wait_for
+from ..helpers import SIMULATE_OUTPUTS, wait_for
 
 pytestmark = [pytest.mark.long, pytest.mark.cluster, pytest.mark.subprocess]
 # a dask scheduler and workers started by hand
 
 # the scene of tests/helpers.py's SIMULATE_SPEC: its kernels are compiled once for both
 SPEC = {"name": "hpc", "friction": "lugre", "dither": "square-velocity",
-        "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick"],
+        "outputs": list(SIMULATE_OUTPUTS),
         "accuracy": "draft", "time": {"t_end": 4.0, "t_transient": 1.0},
         "grid": {"W": [0.0, 0.3], "omega": [200.0], "v_ref": [0.2, 0.4]}}
 

@@ -14,6 +14,7 @@ from engine.blocks import POINT_AXES, BlockResult, run_block
 from engine.scene import Scene
 from engine.settings import Settings
 from tests.engine.common import ALL, scene
+from tests.helpers import SIMULATE_OUTPUTS
 
 P_SHORT = P.pack(t_end=0.5, t_transient=0.1)
 POINTS = np.array([[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 0.4, 0.01]])
@@ -21,8 +22,7 @@ POINTS = np.array([[0.3, 200.0, 0.4, 0.1], [0.0, 200.0, 0.2, 0.1], [0.5, 300.0, 
 # SIMULATE_SPEC, tests/helpers.py, and test_fixed_costs', test_hpc's, test_gpu_workers'): the
 # quick tests below share its kernels with those sweeps instead of compiling a scene of their
 # own (15-25 s of the quick set's 3 minutes each)
-SWEPT_OUTPUTS = ("v_mean", "v_slow_p2p", "F_mean", "stick_fraction", "max_stick")
-SWEPT = Scene.from_params(P_SHORT, dither="square-velocity", outputs=SWEPT_OUTPUTS)
+SWEPT = Scene.from_params(P_SHORT, dither="square-velocity", outputs=SIMULATE_OUTPUTS)
 
 
 @pytest.mark.long

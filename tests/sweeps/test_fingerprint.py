@@ -17,6 +17,7 @@ from store.catalogue import Catalogue
 from store.catalogue_db import SCHEMA
 from sweeps import cli, lookup, version
 from sweeps.spec import parse_spec
+from ..helpers import SIMULATE_OUTPUTS
 
 FP_A, FP_B = "aaaaaaaaaaaa", "bbbbbbbbbbbb"
 
@@ -182,9 +183,8 @@ from sweeps.spec import parse_spec
 chart = parse_spec({{"name": "c", "friction": "lugre", "method": "averaged", "refine": True,
                     "grid": {{"W": {{"start": 0.0, "stop": 1.0, "num": 9}},
                              "v_ref": {{"start": 0.05, "stop": 1.0, "num": 9}}}}}})
-sim = parse_spec({{"name": "s", "friction": "lugre", "accuracy": "draft",   # (the scene of
-                  "outputs": ["v_mean", "v_slow_p2p", "F_mean", "stick_fraction",  # the e2e
-                              "max_stick"],                       # SIMULATE_SPEC: one compile)
+sim = parse_spec({{"name": "s", "friction": "lugre", "accuracy": "draft",
+                  "outputs": {outputs!r},   # (the e2e SIMULATE_SPEC's scene: one compile)
                   "time": {{"t_end": 2.0, "t_transient": 1.0}},
                   "grid": {{"W": [0.0, 0.5], "omega": [100.0], "v_ref": [0.1]}}}})
 before = set(sys.modules)
@@ -207,7 +207,7 @@ def test_the_computing_path_holds_every_module_a_run_loads(tmp_path):
     import subprocess
     import sys
 
-    code = LOADED_BY_A_RUN.format(store=str(tmp_path / "store"))
+    code = LOADED_BY_A_RUN.format(store=str(tmp_path / "store"), outputs=list(SIMULATE_OUTPUTS))
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
