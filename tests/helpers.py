@@ -73,9 +73,14 @@ def gated(env: dict, path, var: str = GATE_ENV) -> dict:
     a folder of tickets) in ``var`` (``$DITHERLAB_BLOCK_GATE``, or ``RERUN_GATE_ENV`` for the
     error estimate's re-runs), and the tests' hooks (tests/hooks/ditherlab_test_hooks.py) on
     the ``PYTHONPATH`` of the processes started with it and their dask workers: the task
-    finds the gates there (sweeps.workers.task.HOOKS_MODULE)."""
+    finds the gates there (sweeps.workers.task.HOOKS_MODULE). One block a task
+    (``$DITHERLAB_MIN_TASK_S`` = 0): a task of several blocks is journaled when its last
+    block is through, so N blocks let through would not always make N journaled."""
+    from sweeps.planning.plan import MIN_TASK_ENV
+
     paths = [str(HOOKS)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p]
-    env.update({var: str(path), "PYTHONPATH": os.pathsep.join(dict.fromkeys(paths))})
+    env.update({var: str(path), "PYTHONPATH": os.pathsep.join(dict.fromkeys(paths)),
+                MIN_TASK_ENV: "0"})
     return env
 
 

@@ -43,12 +43,13 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
 
 
 class SampleRuns:
-    """The error sample's re-runs one accuracy level finer, one task per point
-    (error_estimate.py), costliest first, submitted one by one. The sample is drawn from
-    the sweep id, so it is known when the plan is made: an exhaustive sweep's dispatch
-    runs the re-runs among its blocks, longest expected first (:meth:`next_cost`), and a
-    refined sweep hands them to the dispatch as filler for the workers idling at the tail
-    of each level (error_estimate.sample).
+    """The error sample's re-runs one accuracy level finer (error_estimate.py), costliest
+    first, submitted a task at a time: one re-run a task, or several cheap ones together
+    (:meth:`submit_next`). The sample is drawn from the sweep id, so it is known when the
+    plan is made: an exhaustive sweep's dispatch runs the re-runs among its blocks,
+    longest expected first (:meth:`next_cost`), and a refined sweep hands them to the
+    dispatch as filler for the workers idling at the tail of each level
+    (error_estimate.sample).
 
     ``client`` is a dask client or a :class:`sweeps.workers.threads.ThreadClient`."""
 
@@ -61,12 +62,18 @@ class SampleRuns:
                          for i in range(len(self.index))])
         self.order = np.argsort(-cost, kind="stable")
         self.costs = [float(cost[i]) for i in self.order]   # in submission order
-        self.futures: dict[int, object] = {}
+        self.futures: dict[int, object] = {}   # re-run -> its task (shared by a group)
+        self.groups: list[tuple[object, list[int]]] = []   # (task, its re-runs), in order
+
+    def pending(self) -> list:
+        """The tasks not finished."""
+        return [f for f, _ in self.groups if not f.done()]
 
     def running(self) -> int:
-        return sum(not f.done() for f in self.futures.values())
+        return len(self.pending())
 
     def finished(self) -> int:
+        """Re-runs finished."""
         return sum(f.done() for f in self.futures.values())
 
     def next_cost(self) -> float | None:
@@ -74,15 +81,24 @@ class SampleRuns:
         k = len(self.futures)
         return self.costs[k] if k < len(self.order) else None
 
-    def submit_next(self, client) -> bool:
-        """Submit the next re-run; False when all are submitted."""
-        if len(self.futures) == len(self.order):
+    def submit_next(self, client, at_most_s: float = 0.0) -> bool:
+        """Submit the next re-run as one task, with those after it while their summed
+        expected seconds (:meth:`next_cost`) stay within ``at_most_s``: cheap re-runs
+        share a task, as blocks do (sweeps.planning.plan.blocks_per_task), instead of
+        costing the submitter a task each. False when all are submitted."""
+        k = len(self.futures)
+        if k == len(self.order):
             return False
-        i = int(self.order[len(self.futures)])
-        self.futures[i] = client.submit(task.compute_block, self.scene,
-                                        self.points[i:i + 1], self.plan.params,
-                                        self.finer.settings, self.index[i:i + 1],
-                                        kind="rerun", pure=False)
+        n, total = 1, self.costs[k]
+        while k + n < len(self.order) and total + self.costs[k + n] <= at_most_s:
+            total += self.costs[k + n]
+            n += 1
+        group = [int(i) for i in self.order[k:k + n]]
+        future = client.submit(task.compute_block, self.scene, self.points[group],
+                               self.plan.params, self.finer.settings, self.index[group],
+                               kind="rerun", pure=False)
+        self.futures.update((i, future) for i in group)
+        self.groups.append((future, group))
         return True
 
     def gather(self, client, tick=None, idle=None) -> BlockRecord:
@@ -103,10 +119,14 @@ class SampleRuns:
                 if idle is not None:
                     idle()
                 time.sleep(GATHER_TICK_S)
-        return BlockRecord.concatenate(client.gather(futures))
+        records = client.gather([f for f, _ in self.groups])
+        of_rerun = {}
+        for (_, group), record in zip(self.groups, records):
+            of_rerun.update(zip(group, record.split([1] * len(group))))
+        return BlockRecord.concatenate([of_rerun[i] for i in range(len(self.order))])
 
     def cancel(self, client) -> None:
-        client.cancel(list(self.futures.values()))
+        client.cancel([f for f, _ in self.groups])
 
 
 def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,

@@ -10,6 +10,7 @@ is 0, the dither when W == 0 everywhere) and without every observable not reques
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -52,6 +53,13 @@ MIN_BLOCKS = 8
 # block seconds) get several blocks a task instead (blocks_per_task); the journal keeps
 # blocks, so a resume with any number of workers finds them.
 SUBMITTER_TASKS_PER_S = 100.0
+# A task's shortest worthwhile length: each costs the submitter 10-25 ms of CPU (its dask
+# scheduler, client and nannies, the journal), taken from the workers when they share its
+# cores (a local cluster). scripts/bench_sweep.py (1,000 draft LuGre points, 2 workers,
+# here): tasks of one 0.09 s block lost 39-47 % against half the serial time, of 0.3 s
+# 17-23 %, of 0.6 s 12-15 %, the rest dask's per-task work in the workers.
+MIN_TASK_S = 0.6
+MIN_TASK_ENV = "DITHERLAB_MIN_TASK_S"   # another MIN_TASK_S (min_task_s)
 # Points per block on a GPU (spec device = "cuda"): one thread a point, and a GPU fills with
 # ~10^5 threads (../shared/recipes/gpu.md: 16,384 points ran at 40 % of an H200's rate)
 GPU_BLOCK_POINTS = 131072
@@ -248,14 +256,32 @@ def gpu_refusal(spec: Spec, scene: Scene) -> str:
     return f"device cuda: {why}: this sweep runs on the CPU" if why else ""
 
 
+def min_task_s() -> float:
+    """MIN_TASK_S, or ``$DITHERLAB_MIN_TASK_S`` seconds: 0 gives one block a task (the
+    finest progress and resume, for a scheduler and workers that do not share the
+    submitter's cores; the tests' block gates, which let blocks through one by one)."""
+    text = os.environ.get(MIN_TASK_ENV, "").strip()
+    if not text:
+        return MIN_TASK_S
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not value >= 0 or math.isinf(value):
+        raise ValueError(f"${MIN_TASK_ENV} = {text!r}: give a number of seconds >= 0 "
+                         f"(default {MIN_TASK_S})")
+    return value
+
+
 def blocks_per_task(threads: int, block_s: float, blocks_left: int,
                     ceiling: float | None = None) -> int:
     """Blocks one dask task computes so that ``threads`` workers busy with blocks of
     ``block_s`` seconds ask the submitter for at most ``ceiling`` (SUBMITTER_TASKS_PER_S)
-    tasks a second: 1 up to ``ceiling x block_s`` threads, more beyond, but never so many
-    that a thread would be left without a task among the ``blocks_left``."""
+    tasks a second, and no task is shorter than :func:`min_task_s`: 1 for blocks of that
+    up to ``ceiling x block_s`` threads, more beyond, but never so many that a thread
+    would be left without a task among the ``blocks_left``."""
     ceiling = SUBMITTER_TASKS_PER_S if ceiling is None else ceiling
     if threads < 1 or not block_s > 0:
         return 1
-    k = math.ceil(threads / (ceiling * block_s))
+    k = max(math.ceil(threads / (ceiling * block_s)), math.ceil(min_task_s() / block_s))
     return max(1, min(k, blocks_left // threads))

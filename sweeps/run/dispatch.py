@@ -14,13 +14,14 @@ import numpy as np
 
 from ..workers import task
 from ..workers.matching import matched
-from ..planning.plan import Plan, blocks_per_task, work_s
+from ..planning.plan import Plan, blocks_per_task, min_task_s, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import interrupt
 from .sink import BlockSink
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
-TICK_S = 0.02      # how often it looks for finished blocks
+TICK_S = 0.02      # how often the threads' dispatch looks for finished blocks (x 5)
+WAKE_S = 0.25      # the longest the dask dispatch sleeps (a finished task wakes it at once)
 
 
 def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progress,
@@ -107,7 +108,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     queue = list(reversed(longest_first(todo, cost_of)))   # popped from the end
     inflight: dict = {}        # future -> (its blocks, the workers it may run on)
     shown = [-1]               # re-runs finished, as last shown on the bar
-    cost = [0.0, 0]            # seconds computed, blocks back: the mean block's seconds
+    cost = [0.0, 0, 0.0]       # seconds computed, blocks back, their expected seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
     # event loop as each block finishes: one f.result() per block costs a round trip to that
     # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
@@ -119,7 +120,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         reruns = sample.running() if sample is not None else 0
         while good and len(inflight) + len(groups) + reruns < window:
             if rerun_first(sample, queue, cost_of):
-                sample.submit_next(client)
+                sample.submit_next(client, rerun_group_s(cost))
+                done.update([sample.groups[-1][0]])   # its end wakes the loop too
                 reruns += 1
                 continue
             if not queue:
@@ -141,7 +143,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             done.update(futures)
         while filler is not None and good and not queue and \
                 len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
-            pass
+            done.update([filler.groups[-1][0]])
 
     while True:
         interrupt.check()   # a Ctrl-C that a dask callback swallowed (sweeps.run.interrupt)
@@ -158,7 +160,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         show_reruns(bar, sample, shown)
         if not done.has_ready():
             bar.keep_alive()
-            time.sleep(TICK_S)
+            sleep_until_one(done, WAKE_S)
             continue
         finished = []
         for f, result in done.next_batch(block=False):
@@ -168,8 +170,19 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
                 cost[0] += float(np.sum(result.cost_s))
                 cost[1] += len(group)
+                cost[2] += sum(cost_of[b] for b in group)
         sink.many(finished)   # journaled as one group
         bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+
+
+def sleep_until_one(done, timeout: float) -> None:
+    """Sleep until a task of ``done`` (dask's ``as_completed``) finishes, or ``timeout``
+    seconds: its thread condition is notified as each result arrives, so the next task
+    is submitted at once, without polling (a poll every 20 ms cost the submitter, which
+    shares the workers' cores, 0.05 s of CPU a second)."""
+    with done.thread_condition:
+        if not done.has_ready():
+            done.thread_condition.wait(timeout)
 
 
 def longest_first(todo: list[int], cost_of: dict) -> list[int]:
@@ -184,6 +197,15 @@ def rerun_first(sample, queue: list[int], cost_of: dict) -> bool:
     is left."""
     nxt = sample.next_cost() if sample is not None else None
     return nxt is not None and (not queue or nxt >= cost_of[queue[-1]])
+
+
+def rerun_group_s(cost: list) -> float:
+    """Expected seconds (sweeps.planning.plan.work_s) of re-runs that share a task: as many
+    as take :func:`sweeps.planning.plan.min_task_s` by the blocks measured so far (``cost``: seconds computed, blocks
+    back, their expected seconds; the price per radian is rough, its ratios are not); one
+    re-run a task until blocks are back. 1,000 draft LuGre points' 12 re-runs of 10 ms
+    each, a task each, were the last 0.2 s of a 3.3 s run on 2 workers here."""
+    return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
 
 
 def show_reruns(bar, sample, shown: list[int]) -> None:

@@ -77,8 +77,7 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
     while True:
         interrupt.check()
         stopping = sink.should_stop()
-        reruns = [f for f in (sample.futures.values() if sample is not None else ())
-                  if not f.done()]
+        reruns = sample.pending() if sample is not None else []
         while not stopping and len(inflight) + len(reruns) < window:
             if rerun_first(sample, queue, cost_of):
                 sample.submit_next(pool)
@@ -91,8 +90,7 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
                                  plan.params, plan.numerics.settings, plan.blocks[b])] = b
         if not inflight and (stopping or not queue):
             break
-        running = [f for f in (sample.futures.values() if sample is not None else ())
-                   if not f.done()]
+        running = sample.pending() if sample is not None else []
         done = pool.wait_any([*inflight, *running], TICK_S * 5)
         failed = _collect(plan, [f for f in done if f in inflight], inflight, sink, bar)
         if failed is not None:   # (compute_block never raises: a crash of this process's

@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import atexit
 import logging
-import os
 import signal
-import sys
 import threading
 import time
 from contextlib import contextmanager
@@ -40,6 +38,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
     cube (which fails for an in-memory image: "Semaphore or Lock ... not known")."""
     from distributed import Client, LocalCluster
 
+    from .local_start import local_settings
     from .matching import matched
 
     if scheduler:
@@ -53,7 +52,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
     # user names the dashboard's address
     http = {} if dashboard else {"scheduler_kwargs": {"dashboard_address": LOOPBACK_HTTP}}
     # workers are born ignoring Ctrl-C (their submitter stops them), forked where they can be
-    with _sigint_ignored(), start_method_set():
+    with _sigint_ignored(), local_settings(dashboard):
         try:
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                    host="127.0.0.1", dashboard_address=dashboard,
@@ -68,73 +67,6 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
             log.info("dask dashboard: %s", client.dashboard_link)
         client.register_plugin(_ignore_sigint_plugin())   # ... and workers restarted later
         yield matched(client)
-
-
-PRELOAD = "sweeps.workers.preload"   # what the fork server imports before it forks workers
-# set by dask itself (its nanny's, the process title's), and the test runner's name of the
-# running test: not part of what a worker is started with (start_method)
-_VOLATILE = {"PYTEST_CURRENT_TEST", "PYTHONHASHSEED", "__DASK_PARENT_PID"}
-_forked_from: tuple | None = None   # (environment, sys.path) the fork server started with
-
-
-def start_method() -> str:
-    """How this process starts local workers: ``"forkserver"``, or ``"spawn"`` (dask's
-    default) where the fork server would give a worker another environment than now.
-
-    A spawned worker is a new interpreter that imports dask, numba and the engine and
-    loads numba's registries before its first block: 2-5 s of CPU each, paid by every
-    worker of every cluster (16 at once took 15 s to start on a 16-core machine). The fork
-    server is one process, started with the first worker, that imports all of it once
-    (:mod:`sweeps.workers.preload`); each worker is forked from it, ready. It lives until
-    this process ends, so it keeps the environment and ``sys.path`` it started with: a
-    later cluster whose process changed them (another ``DITHERLAB_CACHE_DIR``, a test's
-    gate, a path in front) gets spawned workers, which start from the present ones. The
-    server is started by the first worker's start, after dask's nanny has put its
-    pre-spawn environment (``OMP_NUM_THREADS``, ``MALLOC_TRIM_THRESHOLD_``,
-    ``PYTHONHASHSEED``) into this process's: started earlier, it would not pass that on."""
-    global _forked_from
-    import multiprocessing
-
-    if "forkserver" not in multiprocessing.get_all_start_methods():
-        return "spawn"
-    now = (_environment(), tuple(sys.path))
-    if _forked_from is None:
-        _forked_from = now
-        _preload_only_ours()
-    return "forkserver" if now == _forked_from else "spawn"
-
-
-def start_method_set():
-    """dask's start method for the local workers started inside (:func:`start_method`), set
-    for them alone. A LocalCluster the caller makes later in this process starts its
-    workers as dask would, with the environment of then (not forked from our server, whose
-    environment may be older), and a worker our nanny restarts later is spawned."""
-    import dask
-
-    return dask.config.set({"distributed.worker.multiprocessing-method": start_method()})
-
-
-def _environment() -> tuple:
-    """The environment a worker would start with, less what dask's nanny sets itself."""
-    import dask
-
-    nanny_sets = set(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
-    return tuple(sorted((k, v) for k, v in os.environ.items()
-                        if k not in _VOLATILE and k not in nanny_sets))
-
-
-def _preload_only_ours() -> None:
-    """The fork server imports :data:`PRELOAD`, not dask's own list (which would import
-    pandas and lz4 into this process first, and workers need neither). dask sets its list
-    once, unless told it is set (a private flag: without it, dask's list and its imports;
-    the workers then import the engine themselves, as spawned ones do)."""
-    import multiprocessing
-
-    import distributed.utils
-
-    if hasattr(distributed.utils, "_forkserver_preload_set"):
-        distributed.utils._forkserver_preload_set = True
-    multiprocessing.get_context("forkserver").set_forkserver_preload([PRELOAD])
 
 
 class EarlyStart:

@@ -1,5 +1,5 @@
 """What the local cluster's fork server imports once, before it forks the workers
-(sweeps.workers.cluster.start_method): dask's worker, the engine's block task, and numba's
+(sweeps.workers.local_start.start_method): dask's worker, the engine's block task, and numba's
 typing and target registries, which numba otherwise loads at a process's first compilation
 or kernel-cache load (0.5-1 s here, a third of it importing scipy.linalg for numba's BLAS
 check). A worker forked from the server starts with all of it in memory instead of

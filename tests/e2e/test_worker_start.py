@@ -1,5 +1,5 @@
 """Local workers are forked from a server that imported the engine once (issue 37;
-sweeps.workers.cluster.start_method), not spawned each on its own, where that gives them
+sweeps.workers.local_start.start_method), not spawned each on its own, where that gives them
 the environment they would have been spawned with; and nothing is left running when the
 process that started them is killed.
 

@@ -22,7 +22,7 @@ from sweeps.workers.threads import ThreadClient
 
 
 # 16 points, 4 omegas: blocks of one omega each cost alike, and the re-runs (one level
-# finer, 12 of the 16 points) cost more or less than a block
+# finer, 11 of the 16 points) cost more or less than a block
 SPEC = {"name": "fixed-costs", "friction": "lugre", "dither": "square-velocity",
         "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
         "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
@@ -84,6 +84,38 @@ def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
     assert costs == sorted(costs, reverse=True), list(zip(started, costs))
     kinds = [k for k, _ in started]   # the costliest re-runs first, the cheapest last
     assert kinds[0] == kinds[-1] == "rerun" and "block" in kinds, kinds
+
+
+def test_cheap_reruns_share_a_task_and_come_back_in_sample_order():
+    """Re-runs cheaper than a task's worth share one task (issue 37: a task each cost the
+    submitter more than the re-run); gathered, they are the record one task each gives,
+    in sample order, and the progress counts re-runs, not tasks."""
+    plan = make_plan(parse_spec(SPEC))
+    one_each, grouped = SampleRuns(plan), SampleRuns(plan)
+    with ThreadClient(1) as pool:
+        alone = one_each.gather(pool)
+        n = len(one_each.order)
+        assert len(one_each.groups) == n > 5
+        assert grouped.submit_next(pool, at_most_s=sum(grouped.costs[:5]))
+        assert [len(g) for _, g in grouped.groups] == [5]
+        together = grouped.gather(pool)   # the rest one a task
+    assert [len(g) for _, g in grouped.groups] == [5] + [1] * (n - 5)
+    assert grouped.finished() == n and grouped.running() == 0
+    np.testing.assert_array_equal(together.index, alone.index)
+    np.testing.assert_array_equal(together.index, grouped.index)
+    for k in alone.outputs:
+        np.testing.assert_array_equal(together.outputs[k], alone.outputs[k])
+
+
+def test_reruns_group_to_a_task_of_measured_seconds():
+    """A re-run group's expected seconds: MIN_TASK_S at the price the blocks back so far
+    measured (2 s measured for 20 s expected: 10x cheaper than priced); one re-run a task
+    until a block is back."""
+    from sweeps.planning.plan import MIN_TASK_S
+    from sweeps.run.dispatch import rerun_group_s
+
+    assert rerun_group_s([0.0, 0, 0.0]) == 0.0
+    assert rerun_group_s([2.0, 10, 20.0]) == pytest.approx(10 * MIN_TASK_S)
 
 
 def test_a_sweep_priced_below_a_cluster_start_is_small():

@@ -1,0 +1,92 @@
+"""How our LocalCluster's processes start and idle: workers forked from one server that
+imported the engine once (:func:`start_method`), and dask's background work, which takes
+its CPU from the workers when they share the submitter's cores, turned down (QUIET)."""
+from __future__ import annotations
+
+import os
+import sys
+
+# dask's periodic work, per second, that a local cluster on a workstation does not need.
+# Idle, with dask's defaults, the submitter (scheduler, nannies) took 8 % of a core and
+# each worker 5 % here (2-core AMD EPYC), on a machine whose 2 cores run the 2 workers;
+# with these, 1.4 % and 0.6 %. Most of a worker's is its statistical profiler, sampling
+# every 10 ms for the dashboard's profile page (kept when a dashboard is asked for).
+QUIET = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.interval": "2s",      # 500 ms: psutil's CPU and memory
+    "distributed.worker.memory.monitor-interval": "1s",    # 100 ms: the nanny's memory limit
+    "distributed.admin.tick.interval": "500ms",            # 20 ms: blocked-event-loop warnings
+    "distributed.scheduler.work-stealing": False,          # our dispatch keeps the queue
+}
+
+PRELOAD = "sweeps.workers.preload"   # what the fork server imports before it forks workers
+# set by dask itself (its nanny's, the process title's), and the test runner's name of the
+# running test: not part of what a worker is started with (start_method)
+_VOLATILE = {"PYTEST_CURRENT_TEST", "PYTHONHASHSEED", "__DASK_PARENT_PID"}
+_forked_from: tuple | None = None   # (environment, sys.path) the fork server started with
+
+
+def start_method() -> str:
+    """How this process starts local workers: ``"forkserver"``, or ``"spawn"`` (dask's
+    default) where the fork server would give a worker another environment than now.
+
+    A spawned worker is a new interpreter that imports dask, numba and the engine and
+    loads numba's registries before its first block: 2-5 s of CPU each, paid by every
+    worker of every cluster (16 at once took 15 s to start on a 16-core machine). The fork
+    server is one process, started with the first worker, that imports all of it once
+    (:mod:`sweeps.workers.preload`); each worker is forked from it, ready. It lives until
+    this process ends, so it keeps the environment and ``sys.path`` it started with: a
+    later cluster whose process changed them (another ``DITHERLAB_CACHE_DIR``, a test's
+    gate, a path in front) gets spawned workers, which start from the present ones. The
+    server is started by the first worker's start, after dask's nanny has put its
+    pre-spawn environment (``OMP_NUM_THREADS``, ``MALLOC_TRIM_THRESHOLD_``,
+    ``PYTHONHASHSEED``) into this process's: started earlier, it would not pass that on."""
+    global _forked_from
+    import multiprocessing
+
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return "spawn"
+    now = (_environment(), tuple(sys.path))
+    if _forked_from is None:
+        _forked_from = now
+        _preload_only_ours()
+    return "forkserver" if now == _forked_from else "spawn"
+
+
+def local_settings(dashboard: str | None = None):
+    """dask's settings for our LocalCluster, made inside, set for it alone (a
+    ``dask.config.set`` context): the workers' start method (:func:`start_method`) and
+    QUIET, without the profiler where a ``dashboard`` would show it. A LocalCluster the
+    caller makes later in this process starts as dask would, its workers with the
+    environment of then (not forked from our server, whose environment may be older); a
+    worker our nanny restarts later is spawned, with these settings (the nanny keeps them)."""
+    import dask
+
+    quiet = dict(QUIET)
+    if dashboard:
+        del quiet["distributed.worker.profile.enabled"]
+    return dask.config.set({"distributed.worker.multiprocessing-method": start_method(),
+                            **quiet})
+
+
+def _environment() -> tuple:
+    """The environment a worker would start with, less what dask's nanny sets itself."""
+    import dask
+
+    nanny_sets = set(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
+    return tuple(sorted((k, v) for k, v in os.environ.items()
+                        if k not in _VOLATILE and k not in nanny_sets))
+
+
+def _preload_only_ours() -> None:
+    """The fork server imports :data:`PRELOAD`, not dask's own list (which would import
+    pandas and lz4 into this process first, and workers need neither). dask sets its list
+    once, unless told it is set (a private flag: without it, dask's list and its imports;
+    the workers then import the engine themselves, as spawned ones do)."""
+    import multiprocessing
+
+    import distributed.utils
+
+    if hasattr(distributed.utils, "_forkserver_preload_set"):
+        distributed.utils._forkserver_preload_set = True
+    multiprocessing.get_context("forkserver").set_forkserver_preload([PRELOAD])
