@@ -178,8 +178,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
 def sleep_until_one(done, timeout: float) -> None:
     """Sleep until a task of ``done`` (dask's ``as_completed``) finishes, or ``timeout``
     seconds: its thread condition is notified as each result arrives, so the next task
-    is submitted at once, without polling (a poll every 20 ms cost the submitter, which
-    shares the workers' cores, 0.05 s of CPU a second)."""
+    is submitted at once, and the submitter, which shares the workers' cores on a local
+    cluster, does not wake 50 times a second to poll."""
     with done.thread_condition:
         if not done.has_ready():
             done.thread_condition.wait(timeout)
@@ -200,11 +200,12 @@ def rerun_first(sample, queue: list[int], cost_of: dict) -> bool:
 
 
 def rerun_group_s(cost: list) -> float:
-    """Expected seconds (sweeps.planning.plan.work_s) of re-runs that share a task: as many
-    as take :func:`sweeps.planning.plan.min_task_s` by the blocks measured so far (``cost``: seconds computed, blocks
-    back, their expected seconds; the price per radian is rough, its ratios are not); one
-    re-run a task until blocks are back. 1,000 draft LuGre points' 12 re-runs of 10 ms
-    each, a task each, were the last 0.2 s of a 3.3 s run on 2 workers here."""
+    """Expected seconds (sweeps.planning.plan.work_s) of the re-runs that share a task: as
+    many as take :func:`sweeps.planning.plan.min_task_s` at the price the blocks back so
+    far measured (``cost``: seconds computed, blocks back, their expected seconds; the
+    price per radian is rough, its ratios less so); one re-run a task until a block is
+    back. The 12 re-runs of 1,000 draft LuGre points (10 ms each), a task each, were the
+    last 0.2 s of a 3.3 s run on 2 workers here."""
     return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
 
 
