@@ -27,8 +27,10 @@ from sweeps.workers.cluster import dask_client
 
 def seen():
     import os, sys
+    import dask
     return {"forked": "sweeps.workers.preload" in sys.modules,
-            "mark": os.environ.get("DITHERLAB_TEST_MARK")}
+            "mark": os.environ.get("DITHERLAB_TEST_MARK"),
+            "profiler": dask.config.get("distributed.worker.profile.enabled")}
 
 
 if __name__ == "__main__":
@@ -54,7 +56,9 @@ if __name__ == "__main__":
             Client(cluster) as client:
         print(json.dumps(list(client.run(
             lambda: ("sweeps.workers.preload" in __import__("sys").modules,
-                     os.environ.get("DITHERLAB_TEST_MARK"))).values())))
+                     os.environ.get("DITHERLAB_TEST_MARK"),
+                     __import__("dask").config.get("distributed.worker.profile.enabled"))
+        ).values())))
 """
 
 
@@ -69,9 +73,10 @@ def test_workers_forked_while_the_environment_holds_spawned_when_it_changed(tmp_
                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-3000:]
     runs = [[json.loads(w) for w in json.loads(line)] for line in out.stdout.splitlines()]
-    assert runs == [[{"forked": True, "mark": "a"}] * 2,      # the fork server's first two
-                    [{"forked": True, "mark": "a"}] * 2,      # ... its next two
-                    [{"forked": False, "mark": "b"}] * 2], out.stderr[-3000:]
+    # dask's profiler off in every worker of ours, forked or spawned (local_start.QUIET)
+    assert runs == [[{"forked": True, "mark": "a", "profiler": False}] * 2,   # the server's first two
+                    [{"forked": True, "mark": "a", "profiler": False}] * 2,   # ... its next two
+                    [{"forked": False, "mark": "b", "profiler": False}] * 2], out.stderr[-3000:]
 
 
 def test_kill_9_of_the_starter_leaves_no_worker_and_no_fork_server(tmp_path):
@@ -80,7 +85,8 @@ def test_kill_9_of_the_starter_leaves_no_worker_and_no_fork_server(tmp_path):
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         line = proc.stdout.readline()
-        assert json.loads(line) == [json.dumps({"forked": True, "mark": "a"})] * 2, \
+        assert json.loads(line) == [json.dumps({"forked": True, "mark": "a",
+                                                "profiler": False})] * 2, \
             proc.stderr.read()[-3000:] if not line else line
         left = psutil.Process(proc.pid).children(recursive=True)
         # the fork server and the two workers forked from it (a fork keeps its command line)
@@ -97,11 +103,12 @@ def test_kill_9_of_the_starter_leaves_no_worker_and_no_fork_server(tmp_path):
 
 
 def test_a_cluster_the_caller_makes_afterwards_is_started_as_dask_would(tmp_path):
-    """The start method is set for our workers alone: a LocalCluster a script makes after a
-    sweep is spawned with its environment of then, not forked from our older server."""
+    """The start method and QUIET are set for our workers alone: a LocalCluster a script
+    makes after a sweep is spawned with its environment of then, not forked from our older
+    server, and keeps dask's profiler."""
     path = tmp_path / "after.py"
     path.write_text(AFTER_OURS)
     out = subprocess.run([sys.executable, str(path)], capture_output=True, text=True,
                          timeout=600, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-3000:]
-    assert json.loads(out.stdout.strip().splitlines()[-1]) == [[False, "theirs"]]
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [[False, "theirs", True]]
