@@ -259,7 +259,9 @@ def gpu_refusal(spec: Spec, scene: Scene) -> str:
 def min_task_s() -> float:
     """MIN_TASK_S, or ``$DITHERLAB_MIN_TASK_S`` seconds: 0 gives one block a task (the
     finest progress and resume, for a scheduler and workers that do not share the
-    submitter's cores; the tests' block gates, which let blocks through one by one)."""
+    submitter's cores; the tests' block gates, which let blocks through one by one). A
+    bad value is refused (exit 2) when a :class:`sweeps.workers.compute.Compute` is made,
+    before anything runs."""
     text = os.environ.get(MIN_TASK_ENV, "").strip()
     if not text:
         return MIN_TASK_S
@@ -268,8 +270,10 @@ def min_task_s() -> float:
     except ValueError:
         value = -1.0
     if not value >= 0 or math.isinf(value):
-        raise ValueError(f"${MIN_TASK_ENV} = {text!r}: give a number of seconds >= 0 "
-                         f"(default {MIN_TASK_S})")
+        from ..errors import RefusedError
+
+        raise RefusedError(f"${MIN_TASK_ENV} = {text!r}: give a number of seconds >= 0 "
+                           f"(default {MIN_TASK_S})")
     return value
 
 

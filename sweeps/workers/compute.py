@@ -31,6 +31,9 @@ class Compute:
                  scheduler: str | None = None, client=None, dashboard: str | None = None):
         if sum(x is not None for x in (batch, scheduler, client)) > 1:
             raise ValueError("compute on batch jobs, a scheduler or a client: one of them")
+        from ..planning.plan import min_task_s
+
+        min_task_s()   # a bad $DITHERLAB_MIN_TASK_S: one line (exit 2) before anything runs
         self.workers, self.batch, self.scheduler = workers, batch, scheduler
         self.dashboard = dashboard
         self._given = client

@@ -23,8 +23,11 @@ def test_one_block_a_task_below_the_ceiling_more_beyond():
 def test_no_task_shorter_than_min_task_s(monkeypatch):
     """Cheap blocks go several to a task on a workstation too (issue 37): each task costs
     the submitter, on the workers' cores, 10-25 ms of CPU. ``$DITHERLAB_MIN_TASK_S`` sets
-    another floor (0: one block a task); a bad value is one clear error."""
+    another floor (0: one block a task); a bad value is one clear error, when the run's
+    Compute is made."""
+    from sweeps.errors import RefusedError
     from sweeps.planning.plan import MIN_TASK_ENV, MIN_TASK_S
+    from sweeps.workers.compute import Compute
 
     monkeypatch.delenv(MIN_TASK_ENV, raising=False)
     assert blocks_per_task(2, MIN_TASK_S / 6, 1000, ceiling=200) == 6
@@ -36,8 +39,10 @@ def test_no_task_shorter_than_min_task_s(monkeypatch):
     assert blocks_per_task(2, MIN_TASK_S / 6, 1000, ceiling=200) == 12
     for bad in ("fast", "-1", "nan", "inf"):
         monkeypatch.setenv(MIN_TASK_ENV, bad)
-        with pytest.raises(ValueError, match=f"{MIN_TASK_ENV} = '{bad}': give a number"):
+        with pytest.raises(RefusedError, match=f"{MIN_TASK_ENV} = '{bad}': give a number"):
             blocks_per_task(2, 0.1, 1000)
+        with pytest.raises(RefusedError, match=f"{MIN_TASK_ENV} = '{bad}': give a number"):
+            Compute(2)   # refused before anything runs (it made no cluster yet)
 
 
 TASK_POINTS: list[int] = []   # points of each task computed (the workers are threads here)
