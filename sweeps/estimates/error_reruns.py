@@ -96,7 +96,7 @@ class SampleRuns:
         group = [int(i) for i in self.order[k:k + n]]
         future = client.submit(task.compute_block, self.scene, self.points[group],
                                self.plan.params, self.finer.settings, self.index[group],
-                               kind="rerun", pure=False)
+                               [1] * n, kind="rerun", pure=False)   # (the hooks: a re-run each)
         self.futures.update((i, future) for i in group)
         self.groups.append((future, group))
         return True

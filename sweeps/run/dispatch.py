@@ -168,11 +168,13 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 group = inflight.pop(f)[0]
                 result = f.result() if f.status == "error" else result   # an error raises
                 finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
-                cost[0] += float(np.sum(result.cost_s))
-                cost[1] += len(group)
-                cost[2] += sum(cost_of[b] for b in group)
-        sink.many(finished)   # journaled as one group
-        bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+                if not result.error:   # (a failed block's cost_s is zeros: not a price)
+                    cost[0] += float(np.sum(result.cost_s))
+                    cost[1] += len(group)
+                    cost[2] += sum(cost_of[b] for b in group)
+        if finished:   # (not: only re-runs ended, which the estimate gathers)
+            sink.many(finished)   # journaled as one group
+            bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
 
 
 def sleep_until_one(done, timeout: float) -> None:

@@ -16,8 +16,7 @@ QUIET = {
     "distributed.admin.system-monitor.interval": "2s",      # 500 ms: psutil's CPU and memory
     "distributed.worker.memory.monitor-interval": "1s",    # 100 ms: the nanny's memory limit
     "distributed.admin.tick.interval": "500ms",            # 20 ms: blocked-event-loop warnings
-    "distributed.scheduler.work-stealing": False,          # our dispatch keeps the queue
-}
+}   # (work stealing stays: a task waiting behind a running one moves to a worker gone idle)
 
 PRELOAD = "sweeps.workers.preload"   # what the fork server imports before it forks workers
 # set by dask itself (its nanny's, the process title's), and the test runner's name of the

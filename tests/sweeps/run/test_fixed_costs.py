@@ -86,10 +86,13 @@ def test_reruns_and_blocks_start_longest_expected_first(monkeypatch):
     assert kinds[0] == kinds[-1] == "rerun" and "block" in kinds, kinds
 
 
-def test_cheap_reruns_share_a_task_and_come_back_in_sample_order():
+def test_cheap_reruns_share_a_task_and_come_back_in_sample_order(tmp_path, monkeypatch):
     """Re-runs cheaper than a task's worth share one task (issue 37: a task each cost the
     submitter more than the re-run); gathered, they are the record one task each gives,
-    in sample order, and the progress counts re-runs, not tasks."""
+    in sample order; the progress counts re-runs, not tasks, and so do the tests' hooks
+    and the block log (a line per re-run)."""
+    log = tmp_path / "blocks.log"
+    monkeypatch.setenv(task.BLOCK_LOG_ENV, str(log))
     plan = make_plan(parse_spec(SPEC))
     one_each, grouped = SampleRuns(plan), SampleRuns(plan)
     with ThreadClient(1) as pool:
@@ -105,6 +108,7 @@ def test_cheap_reruns_share_a_task_and_come_back_in_sample_order():
     np.testing.assert_array_equal(together.index, grouped.index)
     for k in alone.outputs:
         np.testing.assert_array_equal(together.outputs[k], alone.outputs[k])
+    assert len(log.read_text().splitlines()) == 2 * n
 
 
 def test_reruns_group_to_a_task_of_measured_seconds():
