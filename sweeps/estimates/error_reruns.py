@@ -69,6 +69,11 @@ class SampleRuns:
         """The tasks not finished."""
         return [f for f, _ in self.groups if not f.done()]
 
+    @property
+    def last_task(self):
+        """The task :meth:`submit_next` submitted last."""
+        return self.groups[-1][0]
+
     def running(self) -> int:
         return len(self.pending())
 

@@ -56,8 +56,8 @@ SUBMITTER_TASKS_PER_S = 100.0
 # A task's shortest worthwhile length: each costs the submitter 10-25 ms of CPU (its dask
 # scheduler, client and nannies, the journal), taken from the workers when they share its
 # cores (a local cluster). scripts/bench_sweep.py (1,000 draft LuGre points, 2 workers,
-# here): tasks of one 0.09 s block lost 39-47 % against half the serial time, of 0.3 s
-# 17-23 %, of 0.6 s 12-15 %, the rest dask's per-task work in the workers.
+# here): tasks of one 0.09 s block lost 39-57 % against half the serial time, of 0.3 s
+# 17-23 %, of 0.6 s 12-20 % (1.0 s no better), the rest dask's per-task work.
 MIN_TASK_S = 0.6
 MIN_TASK_ENV = "DITHERLAB_MIN_TASK_S"   # another MIN_TASK_S (min_task_s)
 # Points per block on a GPU (spec device = "cuda"): one thread a point, and a GPU fills with

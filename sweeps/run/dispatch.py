@@ -121,7 +121,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         while good and len(inflight) + len(groups) + reruns < window:
             if rerun_first(sample, queue, cost_of):
                 sample.submit_next(client, rerun_group_s(cost))
-                done.update([sample.groups[-1][0]])   # its end wakes the loop too
+                done.update([sample.last_task])   # its end wakes the loop too
                 reruns += 1
                 continue
             if not queue:
@@ -143,7 +143,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             done.update(futures)
         while filler is not None and good and not queue and \
                 len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
-            done.update([filler.groups[-1][0]])
+            done.update([filler.last_task])
 
     while True:
         interrupt.check()   # a Ctrl-C that a dask callback swallowed (sweeps.run.interrupt)
@@ -182,9 +182,13 @@ def sleep_until_one(done, timeout: float) -> None:
     seconds: its thread condition is notified as each result arrives, so the next task
     is submitted at once, and the submitter, which shares the workers' cores on a local
     cluster, does not wake 50 times a second to poll."""
-    with done.thread_condition:
+    condition = getattr(done, "thread_condition", None)   # (public, not documented:
+    if condition is None:                                 # a dask without it, a 20 ms poll)
+        time.sleep(TICK_S)
+        return
+    with condition:
         if not done.has_ready():
-            done.thread_condition.wait(timeout)
+            condition.wait(timeout)
 
 
 def longest_first(todo: list[int], cost_of: dict) -> list[int]:

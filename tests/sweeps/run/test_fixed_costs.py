@@ -111,13 +111,14 @@ def test_cheap_reruns_share_a_task_and_come_back_in_sample_order(tmp_path, monke
     assert len(log.read_text().splitlines()) == 2 * n
 
 
-def test_reruns_group_to_a_task_of_measured_seconds():
+def test_reruns_group_to_a_task_of_measured_seconds(monkeypatch):
     """A re-run group's expected seconds: MIN_TASK_S at the price the blocks back so far
     measured (2 s measured for 20 s expected: 10x cheaper than priced); one re-run a task
     until a block is back."""
-    from sweeps.planning.plan import MIN_TASK_S
+    from sweeps.planning.plan import MIN_TASK_ENV, MIN_TASK_S
     from sweeps.run.dispatch import rerun_group_s
 
+    monkeypatch.delenv(MIN_TASK_ENV, raising=False)   # (the default floor)
     assert rerun_group_s([0.0, 0, 0.0]) == 0.0
     assert rerun_group_s([2.0, 10, 20.0]) == pytest.approx(10 * MIN_TASK_S)
 
