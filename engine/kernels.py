@@ -10,7 +10,6 @@ recording at uniform instants from the dense output is a compile-time one
 from __future__ import annotations
 
 import math
-import types
 from collections.abc import Callable
 from functools import cache
 from typing import NamedTuple
@@ -44,7 +43,6 @@ class PointKernel(NamedTuple):
     alloc: Callable        # alloc() -> work (method scratch)
     run_point: Callable    # run_point(p, cfg, work, y, obs, out, ctr, rec) -> status
     shapes: tuple | None   # the shapes of alloc()'s arrays (Stepper.shapes; None: CPU only)
-    inlined: Callable      # run_point compiled into its caller (numba IR): the block kernel
 
 
 def make_config(settings: Settings, record_every: int = 1, sample_dt: float = 0.0,
@@ -80,21 +78,6 @@ def _record_instant(t, y, p, sq, obs, ctr, rec):
     record_sample(t, y, ctr, rec)
 
 
-def _inlinable(func):
-    """A copy of the njit-to-be ``func`` that numba inlines into its caller (numba IR).
-
-    The block kernel calls ``run_point`` inlined: as a dispatcher of its own, the whole
-    point integrator (which its library links in) was optimised, turned into machine code,
-    wrapped and cached once more for ``run_point`` alone, on the batch path that never calls
-    it from Python: 4-7 s of a scene's 17-28 s first compile here (measured alternated,
-    the cheap LuGre scene and Fig. 14's; the same bits). The copy has its own name, so its
-    dispatcher's UUID differs from the plain one's (engine.jit)."""
-    copy = types.FunctionType(func.__code__, func.__globals__, func.__name__,
-                              func.__defaults__, func.__closure__)
-    copy.__qualname__ = func.__qualname__ + "_inlined"
-    return njit(inline="always", error_model="numpy")(copy)
-
-
 @cache
 def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``.
@@ -117,6 +100,7 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     if n_err > N_ATOL:
         raise ValueError(f"{scene.system}: {n_err} controlled components, room for {N_ATOL}")
 
+    @njit(error_model="numpy")
     def run_point(p, cfg, work, y, obs, out, ctr, rec):
         c = cfg[0]
         init(p, y)
@@ -137,12 +121,9 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                 return S.NON_FINITE
         return S.OK
 
-    inlined = _inlinable(run_point)
-    run_point = njit(error_model="numpy")(run_point)
-
     n_out = len(observer.names) + (N_HIST if observer.hist else 0)
     return PointKernel(system.n, observer.size, observer.names, n_out, stepper.alloc,
-                       run_point, stepper.shapes, inlined)
+                       run_point, stepper.shapes)
 
 
 @cache
@@ -155,7 +136,7 @@ def block_kernel(scene) -> Callable:
     """
     pk = point_kernel(scene)
     n, size, k = pk.n, pk.obs_size, pk.n_out
-    alloc, run_point = pk.alloc, pk.inlined
+    alloc, run_point = pk.alloc, pk.run_point
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 
     @njit(error_model="numpy")
@@ -166,8 +147,9 @@ def block_kernel(scene) -> Callable:
         ctr = np.zeros(CTR_SIZE, np.int64)
         rec = np.empty((0, n + 1))
         # element loops, not ``out[j, :] = o``: an array-to-array slice assignment makes
-        # numba compile its shape-mismatch message (str, repr, concatenation: ~3 s of a
-        # first compile in every process, for an error these shapes cannot raise)
+        # numba compile its shape-mismatch message (str, repr, concatenation: ~3 s of the
+        # first compile in each process that compiles), for an error these shapes cannot
+        # raise; run_block allocates ``out`` with the k = pk.n_out columns written here
         for j in range(points.shape[0]):
             for i in range(q.size):
                 q[i] = p[i]

@@ -1,96 +1,110 @@
 #!/usr/bin/env python
 """What a scene's first compile costs: numba compiling its block kernel into an empty cache.
 
-Each run is a fresh process with its own empty ``$DITHERLAB_CACHE_DIR`` that calls
-``engine.blocks.run_block`` on one point (the compile, timed as wall and CPU seconds), then
-on 12 points (the kernel's run time, to see that a change to what is compiled costs no
-speed). With ``--baseline DIR`` (a git worktree of another commit: ``git worktree add
-/tmp/base <commit>``) the two trees are run alternately, ``--repeats`` times each, and the
-12 points' outputs of the last two runs are compared bit for bit.
+Each run is a fresh process with its own empty ``$DITHERLAB_CACHE_DIR``. It plans a sweep
+(``sweeps.planning.plan.make_plan``: the Scene and parameters a sweep compiles), runs
+``engine.blocks.run_block`` on the plan's first point (the compile, timed as wall and CPU
+seconds), then on the plan's first block (the kernel's run time, to see that a change to
+what is compiled costs no speed). With ``--baseline DIR`` (a git worktree of another
+commit: ``git worktree add /tmp/base <commit>``) the two trees are run alternately,
+``--repeats`` times each, and the first block's statuses, counters and output bytes of
+their last runs are compared.
 
     .venv/bin/python scripts/first_compile.py [--scenes cheap,fig14] [--repeats 3]
                                               [--baseline /tmp/base]
 
-Scenes: ``cheap`` (LuGre, no dither, v_mean and F_mean: bench_efficiency.py's cheap sweep)
-and ``fig14`` (specs/fig14.toml's: elasto-plastic, sine dither, seven outputs), both DP5.
-Compiling is single-threaded: run it on an otherwise idle machine (the CPU seconds show
-when it was not: wall well above CPU).
+Scenes: ``cheap`` (scripts/bench_efficiency.py's cheap sweep: 1,000 draft LuGre points
+without dither, v_mean and F_mean) and ``fig14`` (specs/fig14.toml: elasto-plastic, sine
+dither, seven outputs, standard), both DP5. Compiling is single-threaded: run it on an
+otherwise idle machine (the CPU seconds show when it was not: wall well above CPU).
 """
 from __future__ import annotations
 
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
+from bench_efficiency import CHEAP
+from machine import cores, cpu_model
 
 ROOT = Path(__file__).resolve().parents[1]
-
-SCENES = {
-    "cheap": {"friction": "lugre", "dither": "none", "outputs": ["v_mean", "F_mean"]},
-    "fig14": {"friction": "elastoplastic", "dither": "sine-velocity",
-              "outputs": ["stick_fraction", "near_slip_fraction", "long_stick_fraction",
-                          "max_stick", "v_slow_p2p", "F_mean", "alpha_hist"]},
-}
+SPECS = {"cheap": CHEAP, "fig14": tomllib.loads((ROOT / "specs" / "fig14.toml").read_text())}
 
 CHILD = """
 import json, sys, time
 import numpy as np
-from engine import Scene, registry
 from engine.blocks import run_block
+from sweeps.planning.plan import make_plan
+from sweeps.spec import parse_spec
 
-kw = json.loads(sys.argv[1])
-scene = Scene(**{**kw, "outputs": tuple(kw["outputs"])})
-p = registry.pack(scene.friction, scene.system)
+plan = make_plan(parse_spec(json.loads(sys.argv[1])))
+block = plan.block_points(0)
+settings = plan.numerics.settings
 wall, cpu = time.perf_counter(), time.process_time()
-run_block(scene, np.array([[1.0, 100.0, 0.1, 0.1]]), p)
+run_block(plan.scene, block[:1], plan.params, settings)
 wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-points = np.array([[w, om, 0.1, 0.1] for w in np.linspace(0.1, 3.0, 4) for om in (10.0, 100.0, 1000.0)])
 run = time.perf_counter()
-r = run_block(scene, points, p)
+r = run_block(plan.scene, block, plan.params, settings)
 run = time.perf_counter() - run
-np.save(sys.argv[2], np.column_stack([v.reshape(len(points), -1) for v in r.outputs.values()]))
-print(json.dumps({"wall": wall, "cpu": cpu, "run": run}))
+np.savez(sys.argv[2], status=r.status, counters=np.column_stack([r.steps, r.rejected, r.evals]),
+         outputs=np.column_stack([v.reshape(len(block), -1) for v in r.outputs.values()]))
+print(json.dumps({"wall": wall, "cpu": cpu, "run": run, "points": len(block)}))
 """
 
 
-def first_compile(tree: Path, scene: dict, out: Path) -> dict:
+def first_compile(tree: Path, spec: dict, out: Path) -> dict:
+    """One fresh process of ``tree`` with an empty kernel cache."""
     with tempfile.TemporaryDirectory() as cache:
-        env = {**os.environ, "DITHERLAB_CACHE_DIR": cache, "PYTHONPATH": str(tree)}
-        proc = subprocess.run([sys.executable, "-c", CHILD, json.dumps(scene), str(out)],
-                              capture_output=True, text=True, cwd=tree, env=env, check=True)
+        path = os.pathsep.join([str(tree), os.environ.get("PYTHONPATH", "")])
+        env = {**os.environ, "DITHERLAB_CACHE_DIR": cache, "PYTHONPATH": path}
+        proc = subprocess.run([sys.executable, "-c", CHILD, json.dumps(spec), str(out)],
+                              capture_output=True, text=True, cwd=tree, env=env, timeout=900)
+    if proc.returncode != 0:
+        sys.exit(f"first_compile: the run in {tree} failed:\n{proc.stderr[-3000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def same(a: Path, b: Path) -> bool:
+    """Equal statuses, counters and output bytes (NaN payloads included)."""
+    with np.load(a) as x, np.load(b) as y:
+        return all(x[k].shape == y[k].shape and x[k].tobytes() == y[k].tobytes()
+                   for k in ("status", "counters", "outputs"))
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--scenes", default="cheap,fig14")
+    ap.add_argument("--scenes", default="cheap,fig14", help=f"of {', '.join(SPECS)}")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--baseline", type=Path, help="a worktree of the commit to compare with")
     args = ap.parse_args(argv)
+    names = args.scenes.split(",")
+    unknown = [n for n in names if n not in SPECS]
+    if unknown:
+        ap.error(f"--scenes: unknown {', '.join(unknown)}; known: {', '.join(SPECS)}")
     trees = {"this": ROOT} | ({"baseline": args.baseline.resolve()} if args.baseline else {})
-    cpu = next((line.split(":", 1)[1].strip() for line in open("/proc/cpuinfo")
-                if line.startswith("model name")), platform.processor())
-    print(f"CPU: {cpu}, {os.cpu_count()} cores; load average {os.getloadavg()[0]:.2f}")
-    print(f"{'scene':6s} {'tree':8s} {'compile wall':>13s} {'compile CPU':>12s} {'12 points':>10s}")
+    print(f"CPU: {cpu_model()}, {cores()} cores; load average {os.getloadavg()[0]:.2f}")
+    print(f"{'scene':6s} {'tree':8s} {'compile wall':>13s} {'compile CPU':>12s} "
+          f"{'first block':>12s}")
     bad = 0
     with tempfile.TemporaryDirectory() as tmp:
-        for name in args.scenes.split(","):
+        for name in names:
             for i in range(args.repeats):
                 for label, tree in (reversed(trees.items()) if i % 2 else trees.items()):
-                    r = first_compile(tree, SCENES[name], Path(tmp) / f"{name}-{label}.npy")
+                    r = first_compile(tree, SPECS[name], Path(tmp) / f"{name}-{label}.npz")
                     print(f"{name:6s} {label:8s} {r['wall']:11.1f} s {r['cpu']:10.1f} s "
-                          f"{r['run']:8.3f} s", flush=True)
+                          f"{r['run']:8.3f} s ({r['points']} points)", flush=True)
             if args.baseline:
-                a, b = (np.load(Path(tmp) / f"{name}-{label}.npy") for label in trees)
-                same = a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=True))
-                bad += not same
-                print(f"{name}: outputs of the two trees {'bit-identical' if same else 'DIFFER'}")
+                ok = same(*(Path(tmp) / f"{name}-{label}.npz" for label in trees))
+                bad += not ok
+                print(f"{name}: the first block of the two trees "
+                      f"{'bit-identical' if ok else 'DIFFERS'} (statuses, counters, outputs)")
+    print(f"load average at the end {os.getloadavg()[0]:.2f}")
     return 1 if bad else 0
 
 

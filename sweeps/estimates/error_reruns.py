@@ -77,6 +77,12 @@ class SampleRuns:
     def running(self) -> int:
         return len(self.pending())
 
+    def outstanding(self) -> int:
+        """Tasks still to come: those running, and a task for each re-run not submitted
+        yet (the most it may take). A batch cluster keeps a job for each
+        (sweeps.run.dispatch): gather() waits for them after the last block."""
+        return self.running() + len(self.order) - len(self.futures)
+
     def finished(self) -> int:
         """Re-runs finished."""
         return sum(f.done() for f in self.futures.values())

@@ -150,8 +150,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             _resubmit_orphans(client, inflight, good, queue)
-            if compute is not None:
-                compute.shrink(len(queue) + len(inflight))
+            if compute is not None:   # the re-runs still to come need workers too
+                compute.shrink(len(queue) + len(inflight) + outstanding(sample, filler))
         stopping = sink.should_stop()
         if not stopping:
             fill()
@@ -189,6 +189,15 @@ def sleep_until_one(done, timeout: float) -> None:
     with condition:
         if not done.has_ready():
             condition.wait(timeout)
+
+
+def outstanding(*samples) -> int:
+    """Tasks the error samples (:class:`sweeps.estimates.error_reruns.SampleRuns`, or None)
+    still need: counted as blocks left when a batch cluster ends idle jobs. Without them,
+    the jobs all ended when the last block was back while re-runs were still to run, and
+    the estimate's gather waited for ever for a worker (seen in test_slurm: the submit hung
+    with the cube published, both jobs cancelled 4 s after they started)."""
+    return sum(s.outstanding() for s in samples if s is not None)
 
 
 def longest_first(todo: list[int], cost_of: dict) -> list[int]:

@@ -6,6 +6,8 @@ Here the dispatch on an in-process dask cluster; the rule alone:
 tests/sweeps/planning/test_blocks_per_task.py."""
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 
@@ -53,6 +55,9 @@ class _Bar:
     def keep_alive(self) -> None:   # (sweeps.run.phases: redrawn while the dispatch waits)
         pass
 
+    def set_postfix_str(self, text) -> None:   # (the re-runs finished: dispatch.show_reruns)
+        pass
+
 
 @pytest.mark.timeout(300)
 def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
@@ -77,3 +82,63 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
         np.testing.assert_array_equal(record.index, plan.blocks[b])
         np.testing.assert_array_equal(record.outputs["F_mean"], points[plan.blocks[b], 1])
     assert max(TASK_POINTS) == 3 * 4 and sum(TASK_POINTS) == plan.n_points   # 3 blocks a task
+
+
+RELEASED = threading.Event()   # the re-runs' gate (the workers are threads of this process)
+
+
+def _blocks_now_reruns_later(scene, points, p, settings, index, sizes=None, kind="block"):
+    """compute_block: a block at once (:func:`_instant`), a re-run once RELEASED is set."""
+    if kind == "rerun":
+        RELEASED.wait(60)
+    return _instant(scene, points, p, settings, index, sizes)
+
+
+class _Jobs:
+    """A batch cluster's Compute as the dispatch sees it: told, every look at the workers,
+    how many tasks are left (compute.shrink), which it would end idle jobs below. Records
+    each count with the error sample's re-runs still to come at that moment."""
+
+    def __init__(self, sample):
+        self.sample, self.told = sample, []
+
+    def shrink(self, left: int) -> None:
+        self.told.append((left, self.sample.outstanding()))
+
+
+@pytest.mark.timeout(300)
+def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
+    """The error sample's re-runs run among the blocks and may outlast them; the estimate
+    then gathers them. A batch cluster told "no tasks left" when the last block was back
+    ended its idle jobs, and the gather waited for ever for a worker (test_slurm hung so,
+    the cube published, both jobs cancelled 4 s after they started). Here the re-runs
+    wait until the dispatch has returned, so that they are certainly still running at its
+    last look at the workers."""
+    from distributed import Client, LocalCluster
+
+    from sweeps.estimates.error_reruns import SampleRuns
+    from sweeps.workers.matching import matched
+
+    spec = parse_spec({"name": "jobs", "friction": "lugre", "dither": "sine-velocity",
+                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
+                       "grid": {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
+                                                           "num": 20}}})
+    plan = make_plan(spec)
+    sample = SampleRuns(plan)
+    jobs = _Jobs(sample)
+    monkeypatch.setattr(task, "compute_block", _blocks_now_reruns_later)
+    monkeypatch.setattr(dispatch, "REFRESH_S", 0.0)   # a look at the workers every turn
+    sink = _Sink()
+    # more threads than re-runs: the blocked re-runs leave threads to the blocks
+    with LocalCluster(n_workers=1, threads_per_worker=len(sample.order) + 4,
+                      processes=False, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        try:
+            dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink,
+                               _Bar(), sample=sample, compute=jobs)
+        finally:
+            RELEASED.set()
+        sample.gather(client)
+    assert sorted(sink.got) == list(range(len(plan.blocks)))
+    assert jobs.told and all(left >= to_come for left, to_come in jobs.told), jobs.told
+    assert jobs.told[-1][1] > 0   # the last look came with re-runs still running

@@ -7,6 +7,7 @@ import pytest
 
 from engine import params as P
 from engine import status as S
+from engine.api import simulate
 from engine.blocks import run_block
 from engine.scene import Scene
 from engine.settings import Settings
@@ -49,6 +50,30 @@ def test_block_marks_only_the_points_over_budget():
     assert list(res.status) == [S.OK, S.FAILED]
     assert np.all(np.isfinite([res.outputs[k][0] for k in res.outputs]))
     assert np.all(np.isnan([res.outputs[k][1] for k in res.outputs]))
+
+
+# long: rodas4's block kernel is this test's own compilation (~15 s)
+@pytest.mark.long
+@pytest.mark.parametrize("method", ["dopri5", "rodas4"])
+def test_the_block_kernel_gives_the_one_point_kernels_bits(method):
+    """The block kernel (engine.kernels.block_kernel) copies each point's results into its
+    rows element by element; the API (engine.api.simulate) runs the same ``run_point`` on
+    one point: for a finished point, a non-finite one (vd = NaN) and one over its step
+    budget, the same status, counters and output bits (NaN included)."""
+    scene = Scene(integrator=method, slow_force=False, outputs=OUTPUTS)   # kernels shared
+    p = P.pack(**{**FIG10, "t_end": 2.0})
+    points = np.array([[0.4, 1e3, 0.4, 0.1], [0.4, 1e3, 0.4, np.nan], [0.4, 1e5, 0.4, 0.1]])
+    settings = Settings(rtol=1e-6, atol=1e-9, max_steps=20_000)
+    res = run_block(scene, points, p, settings)
+    assert list(res.status) == [S.OK, S.NON_FINITE, S.FAILED]
+    for j, row in enumerate(points):
+        q = p.copy()
+        q[[P.W, P.OMEGA, P.V_REF, P.VD]] = row
+        one = simulate(scene, q, settings)
+        assert (res.status[j], res.steps[j], res.rejected[j], res.evals[j]) == \
+            (one.status, one.steps, one.rejected, one.evals)
+        block = np.array([res.outputs[k][j] for k in OUTPUTS])
+        assert block.tobytes() == np.array([one.outputs[k] for k in OUTPUTS]).tobytes()
 
 
 @pytest.mark.parametrize("method", ["dopri5", "rodas4"])
