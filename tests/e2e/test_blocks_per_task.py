@@ -126,8 +126,10 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
     plan = make_plan(spec)
     sample = SampleRuns(plan)
     jobs = _Jobs(sample)
+    RELEASED.clear()   # (a second run of this test in one process gates its re-runs too)
     monkeypatch.setattr(task, "compute_block", _blocks_now_reruns_later)
-    monkeypatch.setattr(dispatch, "REFRESH_S", 0.0)   # a look at the workers every turn
+    monkeypatch.setattr(dispatch, "REFRESH_S", -1.0)   # a look at the workers every turn,
+    # whatever the clock's resolution
     sink = _Sink()
     # more threads than re-runs: the blocked re-runs leave threads to the blocks
     with LocalCluster(n_workers=1, threads_per_worker=len(sample.order) + 4,
