@@ -31,7 +31,7 @@ from functools import cache
 import numpy as np
 
 from . import params as P
-from .integrators.problem import CTR_SIZE
+from .integrators.problem import CONFIG, CTR_SIZE
 from .kernels import method_module, point_kernel
 
 THREADS_PER_BLOCK = 128   # a CUDA block of threads (points); 4 warps
@@ -54,6 +54,20 @@ def _numpy_removed_names() -> None:
     for old, new in (("row_stack", "vstack"), ("trapz", "trapezoid"), ("in1d", "isin")):
         if not hasattr(np, old) and hasattr(np, new):
             setattr(np, old, getattr(np, new))
+
+
+def _no_small_grid_warning() -> None:
+    """A small launch (the error estimate's re-runs, a warm-up, a small sweep) is wanted:
+    numba-cuda's "Grid size N will likely result in GPU under-utilization" is no news to the
+    user. Its own switch, set in the environment too (numba re-reads its config when the
+    environment changes); a ``warnings`` filter around the launch is not thread-safe and let
+    the warning through on a lent H200 (docs/measured/h200-2026-11-27.txt)."""
+    os.environ["NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS"] = "0"
+    try:
+        from numba.cuda.core import config
+    except ImportError:   # another numba-cuda layout, or the simulator's
+        return
+    config.CUDA_LOW_OCCUPANCY_WARNINGS = 0
 
 
 def check_device() -> str:
@@ -116,6 +130,22 @@ def _simulator_array(a):
     return item._ary if item is not None else a
 
 
+def _config_copy_lines(dst: str, src: str) -> str:
+    """Source copying the settings record ``src[0]`` into ``dst[0]`` field by field (every
+    thread its own copy in its local memory: the driver writes the point's fixed step and
+    tolerances into it; one record on the device for the whole launch, not one a point
+    copied from the host: 656 bytes a point, 688 MB and ~1 s of numpy for a million)."""
+    lines = []
+    for name in CONFIG.names:
+        shape = CONFIG.fields[name][0].shape
+        if shape:
+            lines.append(f"    for i in range({shape[0]}):")
+            lines.append(f"        {dst}[0][{name!r}][i] = {src}[0][{name!r}][i]")
+        else:
+            lines.append(f"    {dst}[0][{name!r}] = {src}[0][{name!r}]")
+    return "\n".join(lines)
+
+
 def kernel_source(shapes, n: int, obs_size: int, n_out: int, n_params: int,
                   simulator: bool = False) -> str:
     """The CUDA kernel's Python source for one scene (sizes and shapes as literals).
@@ -124,10 +154,12 @@ def kernel_source(shapes, n: int, obs_size: int, n_out: int, n_params: int,
     body = "\n".join("    " + line for line in alloc)
     host = "host" if simulator else ""
     return f'''
-def block(points, p, cfgs, rec, out, status, counters):
+def block(points, p, cfg0, rec, out, status, counters):
     j = cuda.grid(1)
     if j >= points.shape[0]:
         return
+    cfg = cuda.local.array(1, CONFIG_T)
+{_config_copy_lines("cfg", "cfg0")}
     q = cuda.local.array({n_params}, float64)
     for i in range({n_params}):
         q[i] = p[i]
@@ -138,7 +170,7 @@ def block(points, p, cfgs, rec, out, status, counters):
     o = cuda.local.array({n_out}, float64)
     ctr = cuda.local.array({CTR_SIZE}, int64)
 {body}
-    status[j] = run_point(q, {host}(cfgs[j:j + 1]), {work}, y, obs[:{obs_size}], o, ctr,
+    status[j] = run_point(q, {host}(cfg), {work}, y, obs[:{obs_size}], o, ctr,
                           {host}(rec))
     for c in range({n_out}):
         out[j, c] = o[c]
@@ -151,14 +183,17 @@ def kernel_namespace(pk) -> dict:
     """The globals of a scene's kernel source: numba.cuda, the types, the grid columns
     and the scene's ``run_point`` (engine.kernels.PointKernel ``pk``)."""
     from numba import cuda, float64, int64
+    from numba.np.numpy_support import from_dtype
 
+    config_t = CONFIG if simulated() else from_dtype(CONFIG)   # (the simulator: numpy's)
     return {"cuda": cuda, "float64": float64, "int64": int64, "COLS": COLS,
+            "CONFIG_T": config_t,
             "run_point": pk.run_point, "host": _simulator_array}
 
 
 @cache
 def block_kernel(scene):
-    """The CUDA kernel ``block[grid, threads](points, p, cfgs, rec, out, status, counters)``
+    """The CUDA kernel ``block[grid, threads](points, p, cfg, rec, out, status, counters)``
     of ``scene`` (compiled at its first launch, once per process and argument types)."""
     from numba import cuda
 
@@ -166,6 +201,7 @@ def block_kernel(scene):
     if why:
         raise ValueError(f"device cuda: {why}")
     _numpy_removed_names()
+    _no_small_grid_warning()
     pk = point_kernel(scene)
     source = kernel_source(pk.shapes, pk.n, pk.obs_size, pk.n_out, scene.n_params,
                            simulated())
@@ -190,7 +226,6 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     block kernel fills them (``engine.blocks.run_block``), in the caller's order;
     ``seconds`` is the kernel's wall time, transfers included."""
     import time
-    import warnings
 
     from numba import cuda
 
@@ -200,7 +235,6 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     points = np.ascontiguousarray(points[order])
     m = points.shape[0]
     kernel = block_kernel(scene)
-    cfgs = np.repeat(cfg, max(m, 1))
     rec = np.empty((0, pk.n + 1))
     out = np.full((m, pk.n_out), np.nan)
     status = np.zeros(m, dtype=np.int8)
@@ -208,17 +242,17 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     if m == 0:
         return out, status, counters, 0.0
     t0 = time.perf_counter()
-    d_out, d_status, d_counters = (cuda.to_device(a) for a in (out, status, counters))
+    stream = cuda.stream()   # a launch of its own: blocks launched from several threads
+    # run side by side, each filling the SMs the others' slowest warps leave idle (on the
+    # default stream they would run one after another)
+    d_out, d_status, d_counters = (cuda.to_device(a, stream=stream)
+                                   for a in (out, status, counters))
     grid = math.ceil(m / THREADS_PER_BLOCK)
     compiled = bool(getattr(kernel, "overloads", True))   # (the simulator compiles nothing)
     try:
-        with warnings.catch_warnings():   # a small launch (the error estimate's re-runs, a
-            # warm-up) is wanted: numba-cuda's "Grid size N will likely result in GPU
-            # under-utilization" (its own warning class, not numba.core's) is no news
-            warnings.filterwarnings("ignore", message=".*GPU under-utilization")
-            kernel[grid, THREADS_PER_BLOCK](cuda.to_device(points), cuda.to_device(p),
-                                            cuda.to_device(cfgs), cuda.to_device(rec),
-                                            d_out, d_status, d_counters)
+        kernel[grid, THREADS_PER_BLOCK, stream](
+            *(cuda.to_device(a, stream=stream) for a in (points, p, cfg, rec)),
+            d_out, d_status, d_counters)
     except Exception as exc:   # noqa: BLE001 -- the first launch compiles: numba.cuda's
         if compiled:           # lowering raises bare KeyErrors (a numpy ufunc) as well as
             raise              # NumbaErrors; a launch of a compiled kernel fails as it is
@@ -228,8 +262,9 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
             f"the GPU ({type(exc).__name__}: {first[0] if first else ''}); its functions "
             "must use math.* for elementary functions, not numpy ufuncs (docs/MODELS.md), "
             "or run without --device cuda") from None
-    cuda.synchronize()
     back = np.empty_like(order)
     back[order] = np.arange(m)
-    out, status = d_out.copy_to_host()[back], d_status.copy_to_host()[back]
-    return out, status, d_counters.copy_to_host()[back], time.perf_counter() - t0
+    out, status, counters = (d.copy_to_host(stream=stream) for d in (d_out, d_status,
+                                                                       d_counters))
+    stream.synchronize()
+    return out[back], status[back], counters[back], time.perf_counter() - t0

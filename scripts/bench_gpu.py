@@ -137,6 +137,54 @@ def row(label: str, n: int, seconds: float) -> str:
     return f"| {label} | {n:,} | {seconds:.3f} s | {n / seconds:,.0f} |"
 
 
+def threads_per_block(args, sizes: list[int]) -> dict:
+    """The anchors' scene on the GPU at each CUDA block size: ``{size: points/s}``."""
+    from engine import gpu
+
+    scene, p, points, settings = anchors_case(args.points, args.tend)
+    rates, default = {}, gpu.THREADS_PER_BLOCK
+    try:
+        for size in sizes:
+            gpu.THREADS_PER_BLOCK = size
+            seconds, _, _ = timed(lambda: on_gpu(scene, p, points, settings), args.repeats)
+            rates[size] = len(points) / seconds
+            print(row(f"anchors scene, engine on the GPU, {size} threads a block",
+                      len(points), seconds) + " - |", flush=True)
+    finally:
+        gpu.THREADS_PER_BLOCK = default
+    return rates
+
+
+def probe(t_end: float | None, repeats: int) -> dict:
+    """Fig. 14's costliest point on one GPU thread, on 32 (one warp, no divergence), the 32
+    points of its warp in a sweep's order (W = 3 down, omega = 1000: divergence), and on
+    one CPU core: seconds and seconds per step."""
+    from engine import params as P
+    from engine.blocks import run_block
+
+    scene, p, points, settings = fig14_case(4, t_end)
+    top = points[np.lexsort((points[:, 0], points[:, 1]))[-1:]]   # omega max, then W max
+    warp = np.repeat(top, 32, axis=0)
+    warp[:, 0] = np.linspace(top[0, 0], 0.0, 96)[:32]   # the sweep's next W values down
+    cases = {"one point": top, "32 copies": np.repeat(top, 32, axis=0), "its warp": warp}
+    gpu_settings = dataclasses.replace(settings, device="cuda")
+    out = {}
+    cpu_s, cpu_res, _ = timed(lambda: run_block(scene, top, p, settings), 1)
+    steps = int(cpu_res.steps[0] + cpu_res.rejected[0])
+    out["cpu core"] = {"seconds": cpu_s, "steps": steps}
+    print(f"\nprobe: Fig. 14's costliest point {top[0, :2].tolist()}, tau 0..{p[P.T_END]:g}: one "
+          f"CPU core {cpu_s:.3f} s, {steps} steps ({1e6 * cpu_s / steps:.2f} us a step)",
+          flush=True)
+    for label, pts in cases.items():
+        seconds, res, _ = timed(lambda: run_block(scene, pts, p, gpu_settings), repeats)
+        most = int((res.steps + res.rejected).max())
+        out[label] = {"seconds": seconds, "most_steps": most}
+        print(f"probe: GPU, {label:9s}: {seconds:.3f} s, most steps {most} "
+              f"({1e6 * seconds / most:.2f} us a step, {seconds / cpu_s:.1f}x the core)",
+              flush=True)
+    return out
+
+
 def spread(n: int, k: int) -> np.ndarray:
     """``k`` indices spread evenly over ``range(n)`` (the CPU's share keeps the cost mix)."""
     return np.unique(np.linspace(0, n - 1, min(k, n)).round().astype(int))
@@ -150,13 +198,24 @@ def main() -> int:
     ap.add_argument("--fig14-cpu", type=int, default=256,
                     help="CPU points, Fig. 14's scene (spread over the GPU's)")
     ap.add_argument("--tend", type=float, default=100.0, help="tau span of the anchors' scene")
+    ap.add_argument("--fig14-tend", type=float, default=None,
+                    help="tau span of Fig. 14's scene (default the spec's 100; the transient "
+                         "is half of it): both sides' cost is linear in it, so a shorter "
+                         "span measures the same ratio in less time")
+    ap.add_argument("--tpb", default="",
+                    help="also time the anchors' scene at these threads per CUDA block "
+                         "(comma-separated; engine.gpu.THREADS_PER_BLOCK)")
+    ap.add_argument("--probe", action="store_true",
+                    help="Fig. 14's costliest point (W = 3, omega = 1000) alone, 32 copies of "
+                         "it, and the 32 points of its warp, on the GPU; alone on a CPU core: "
+                         "a GPU thread's speed against a core's, and what divergence costs")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--only", choices=("anchors", "fig14"), default=None,
                     help="one of the two scenes")
     ap.add_argument("--smoke", action="store_true",
                     help="a few points on a short span (the CUDA simulator)")
     args = ap.parse_args()
-    fig14_tend = None
+    fig14_tend = args.fig14_tend
     if args.smoke:
         args.points, args.cpu_points, args.fig14, args.fig14_cpu = 64, 16, 9, 4
         args.tend, args.repeats, fig14_tend = 0.5, 1, 0.5
@@ -199,6 +258,11 @@ def main() -> int:
         if hand and "points_per_s" in hand:
             print(row("anchors scene, hand kernel (anchor_cuda.py)", args.points,
                       hand["seconds"]) + " - |", flush=True)
+        if args.tpb:
+            report["anchors"]["tpb"] = threads_per_block(args, [int(t) for t in
+                                                                args.tpb.split(",")])
+    if args.probe:
+        report["probe"] = probe(fig14_tend, args.repeats)
     if args.only in (None, "fig14"):
         scene, p, points, settings = fig14_case(args.fig14, fig14_tend)
         measure(f"Fig. 14 scene ({scene.integrator})", "fig14", scene, p, points, settings,

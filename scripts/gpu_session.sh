@@ -18,7 +18,8 @@ OUT=${1:?usage: gpu_session.sh OUTDIR}
 mkdir -p "$OUT"
 export PYTHONUNBUFFERED=1
 if [ -d .whl ] && ls .whl/*.whl >/dev/null 2>&1; then
-    python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
+    # (byte-compiled here once, not by each of 16 workers importing dask at the same time)
+    python3 -m pip install -q --no-index --no-deps --no-cache-dir --upgrade \
         --target /tmp/site .whl/*.whl && export PYTHONPATH=/tmp/site
 fi
 export PYTHONPATH=$PWD${PYTHONPATH:+:$PYTHONPATH}
@@ -42,7 +43,8 @@ step() {   # step NAME LIMIT_S COMMAND...: runs it bounded, logs it, says its ti
 if [ -n "${SMOKE:-}" ]; then
     BENCH=(--smoke) MAP=3 EFF=(--sweeps cheap --workers 2) CASES=(lugre-square-rk4)
 else
-    BENCH=(--points 1048576 --cpu-points 4096 --fig14 65536 --fig14-cpu 256 --repeats 2)
+    BENCH=(--points 1048576 --cpu-points 4096 --fig14 65536 --fig14-cpu 256 --fig14-tend 10
+           --tpb 64,256 --probe --repeats 2)
     MAP=1000 EFF=(--sweeps cheap,fig14 --workers "$(nproc)") CASES=()
 fi
 [ -n "${BENCH_ARGS:-}" ] && read -r -a BENCH <<<"$BENCH_ARGS"
@@ -77,7 +79,7 @@ text = Path("specs/fig14.toml").read_text().replace('name = "fig14"', f'name = "
 text = text.replace("num = 31 }", f"num = {n} }}").replace("num = 31, scale", f"num = {n}, scale")
 dest.write_text(text)
 EOF
-step "map_${MAP}" 100 $PY -m sweeps.cli submit "$STORE/map.toml" --device cuda \
+step "map_${MAP}" "${MAP_LIMIT:-150}" $PY -m sweeps.cli submit "$STORE/map.toml" --device cuda \
     --store "$STORE/map" --max-points 2000000 -v
 
 # the GPU-calibrated estimate (ditherlab plan --device cuda), to set beside fig14's launch

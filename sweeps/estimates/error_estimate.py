@@ -42,12 +42,14 @@ REL_FLOOR = 1e-3
 
 
 def finer_numerics(plan: Plan) -> Numerics:
-    """The next level up, or the same integrator at tolerances / 100 at the top."""
+    """The next level up, or the same integrator at tolerances / 100 at the top. On the
+    CPU whatever the sweep's device: a dozen points, each on one GPU thread ~40x slower
+    than on a core (docs/GPU.md), would be a GPU sweep's tail."""
     level = FINER.get(plan.numerics.label)
     if level is not None:
         return numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
     s = plan.numerics.settings
-    finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100,
+    finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100, device="cpu",
                     steps_per_period=s.steps_per_period * 4, h=s.h / 4)
     return Numerics(plan.numerics.integrator, finer, f"{plan.numerics.label}/100")
 

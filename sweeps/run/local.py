@@ -17,6 +17,10 @@ from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun
                        show_reruns)
 from .sink import BlockSink
 
+# Blocks of a GPU sweep launched at a time (engine.gpu.run: a stream each): a launch lasts
+# as long as its slowest warp, and the launches beside it fill the SMs it leaves idle
+GPU_LAUNCHES = 4
+
 
 def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progress,
                      sample=None, warm_up: bool = True) -> None:
@@ -27,7 +31,8 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, p
     and checks as on a cluster, the same longest-first order, the error sample's re-runs
     (``sample``) among the blocks; the kernel is compiled once first (``warm_up``). Times
     go to ``sink.timings``."""
-    with ThreadClient(compute.threads) as pool:
+    gpu = plan.numerics.settings.device == "cuda"
+    with ThreadClient(max(compute.threads, GPU_LAUNCHES if gpu else 1)) as pool:
         if plan.path == "simulate" and warm_up:
             t = time.perf_counter()
             if not _warm_up_here(plan, sink, progress):
