@@ -35,6 +35,8 @@ from .integrators.problem import CONFIG, CTR_SIZE
 from .kernels import method_module, point_kernel
 
 THREADS_PER_BLOCK = 128   # a CUDA block of threads (points); 4 warps
+MAX_REGISTERS = 0         # a cap on a thread's registers (0: ptxas chooses; Fig. 14's
+#                           kernel takes 184, the anchors' 119: scripts/bench_gpu.py --regs)
 COLS = (P.W, P.OMEGA, P.V_REF, P.VD)
 
 
@@ -208,7 +210,8 @@ def block_kernel(scene):
     namespace = kernel_namespace(pk)
     exec(compile(source, f"<engine.gpu kernel of {scene.friction}/{scene.system}>", "exec"),
          namespace)
-    return cuda.jit(namespace["block"])
+    cap = {"max_registers": MAX_REGISTERS} if MAX_REGISTERS and not simulated() else {}
+    return cuda.jit(namespace["block"], **cap)
 
 
 def cost_order(points: np.ndarray) -> np.ndarray:
