@@ -356,3 +356,18 @@ def test_the_grid_is_resolved_once_per_spec(monkeypatch):
     finer_numerics(plans[0])
     assert plans[0].points is plans[1].points is spec.grid_facts.points
     assert len(built) == 1
+
+
+def test_a_gpu_sweeps_error_reruns_run_on_the_cpu():
+    """The error estimate's dozen re-runs of a GPU sweep run on the CPU at every level, the
+    top one (tolerances / 100) too: one GPU thread is ~10x slower than a core (docs/GPU.md,
+    measured on an H200), so on the GPU they would be the sweep's tail."""
+    from sweeps.estimates.error_estimate import finer_numerics
+    from sweeps.planning.plan import make_plan
+
+    spec = parse_spec({**BASE, "device": "cuda", "dither": "square-velocity",
+                       "grid": {"W": [0.0, 0.5], "omega": [100.0, 300.0], "v_ref": [0.4]}})
+    for level in ("draft", "standard", "reference"):
+        plan = make_plan(spec, level)
+        assert plan.numerics.settings.device == "cuda", level
+        assert finer_numerics(plan).settings.device == "cpu", level
