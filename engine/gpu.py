@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from functools import cache
 
 import numpy as np
@@ -63,7 +64,9 @@ def _no_small_grid_warning() -> None:
     numba-cuda's "Grid size N will likely result in GPU under-utilization" is no news to the
     user. Its own switch, set in the environment too (numba re-reads its config when the
     environment changes); a ``warnings`` filter around the launch is not thread-safe and let
-    the warning through on a lent H200 (docs/measured/h200-2026-11-27.txt)."""
+    the warning through on a lent H200 (docs/measured/h200-2026-11-27.txt). Process-wide:
+    the warning is off for the caller's own kernels too, and setting a ``NUMBA_*`` variable
+    makes numba's next config reload re-read them all from the environment."""
     os.environ["NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS"] = "0"
     try:
         from numba.cuda.core import config
@@ -140,6 +143,7 @@ def _config_copy_lines(dst: str, src: str) -> str:
     lines = []
     for name in CONFIG.names:
         shape = CONFIG.fields[name][0].shape
+        assert len(shape) <= 1, f"CONFIG.{name}: a copy of scalars and 1-D fields only"
         if shape:
             lines.append(f"    for i in range({shape[0]}):")
             lines.append(f"        {dst}[0][{name!r}][i] = {src}[0][{name!r}][i]")
@@ -160,7 +164,7 @@ def block(points, p, cfg0, rec, out, status, counters):
     j = cuda.grid(1)
     if j >= points.shape[0]:
         return
-    cfg = cuda.local.array(1, CONFIG_T)
+    cfg = cuda.local.array(1, CONFIG_T{"" if simulator else ", alignment=8"})
 {_config_copy_lines("cfg", "cfg0")}
     q = cuda.local.array({n_params}, float64)
     for i in range({n_params}):
@@ -214,6 +218,58 @@ def block_kernel(scene):
     return cuda.jit(namespace["block"], **cap)
 
 
+def _launch(kernel, scene, grid: int, stream, args) -> None:
+    """``kernel[grid, THREADS_PER_BLOCK, stream](*args)``; a first launch that fails to
+    compile is one ValueError naming the rule kernel code breaks."""
+    compiled = bool(getattr(kernel, "overloads", True))   # (the simulator compiles nothing)
+    try:
+        kernel[grid, THREADS_PER_BLOCK, stream](*args)
+    except Exception as exc:   # noqa: BLE001 -- the first launch compiles: numba.cuda's
+        if compiled:           # lowering raises bare KeyErrors (a numpy ufunc) as well as
+            raise              # NumbaErrors; a launch of a compiled kernel fails as it is
+        first = str(exc).strip().splitlines()
+        raise ValueError(
+            f"device cuda: the {scene.friction}/{scene.system} kernel does not compile for "
+            f"the GPU ({type(exc).__name__}: {first[0] if first else ''}); its functions "
+            "must use math.* for elementary functions, not numpy ufuncs (docs/MODELS.md), "
+            "or run without --device cuda") from None
+
+
+# Launches (a stream and the device arrays of one block's shapes) kept for later launches
+# of the same shapes: while blocks run, no device memory is allocated or freed. numba-cuda
+# frees device memory through a per-context queue that is not thread-safe (its flush pops
+# from a deque that another thread may be emptying: blocks are launched from several
+# threads, sweeps.run.local.GPU_LAUNCHES), and a free (cuMemFree) may wait for every kernel
+# on the device, which would hold the other threads' next launches back. Allocations and
+# frees happen under _POOL_LOCK only.
+_IDLE: dict[tuple, list] = {}
+_POOL_LOCK = threading.Lock()
+MAX_IDLE = 8   # launches kept idle (the oldest shapes' go first)
+
+
+def _take(shapes: tuple):
+    """``(stream, device arrays)`` of these ``(shape, dtype)``s: an idle one, or new."""
+    from numba import cuda
+
+    with _POOL_LOCK:
+        idle = _IDLE.get(shapes)
+        if idle:
+            return idle.pop()
+        stream = cuda.stream()   # a stream a launch: launches from several threads overlap
+        return stream, tuple(cuda.device_array(shape, dtype, stream=stream)
+                             for shape, dtype in shapes)
+
+
+def _give_back(shapes: tuple, launch) -> None:
+    with _POOL_LOCK:
+        _IDLE.setdefault(shapes, []).append(launch)
+        while sum(len(v) for v in _IDLE.values()) > MAX_IDLE:
+            oldest = next(iter(_IDLE))
+            del _IDLE[oldest][0]          # freed here, under the lock
+            if not _IDLE[oldest]:
+                del _IDLE[oldest]
+
+
 def cost_order(points: np.ndarray) -> np.ndarray:
     """The order the GPU runs ``points`` in: by dither frequency, highest first, then by
     dither amplitude, largest first (a point's steps grow with omega: fixed steps per
@@ -230,8 +286,6 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     ``seconds`` is the kernel's wall time, transfers included."""
     import time
 
-    from numba import cuda
-
     check_device()
     pk = point_kernel(scene)
     order = cost_order(points)
@@ -245,29 +299,19 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     if m == 0:
         return out, status, counters, 0.0
     t0 = time.perf_counter()
-    stream = cuda.stream()   # a launch of its own: blocks launched from several threads
-    # run side by side, each filling the SMs the others' slowest warps leave idle (on the
-    # default stream they would run one after another)
-    d_out, d_status, d_counters = (cuda.to_device(a, stream=stream)
-                                   for a in (out, status, counters))
-    grid = math.ceil(m / THREADS_PER_BLOCK)
-    compiled = bool(getattr(kernel, "overloads", True))   # (the simulator compiles nothing)
+    hosts = (points, p, cfg, rec, out, status, counters)
+    shapes = tuple((a.shape, a.dtype) for a in hosts)
+    launch = _take(shapes)
+    stream, devs = launch
     try:
-        kernel[grid, THREADS_PER_BLOCK, stream](
-            *(cuda.to_device(a, stream=stream) for a in (points, p, cfg, rec)),
-            d_out, d_status, d_counters)
-    except Exception as exc:   # noqa: BLE001 -- the first launch compiles: numba.cuda's
-        if compiled:           # lowering raises bare KeyErrors (a numpy ufunc) as well as
-            raise              # NumbaErrors; a launch of a compiled kernel fails as it is
-        first = str(exc).strip().splitlines()
-        raise ValueError(
-            f"device cuda: the {scene.friction}/{scene.system} kernel does not compile for "
-            f"the GPU ({type(exc).__name__}: {first[0] if first else ''}); its functions "
-            "must use math.* for elementary functions, not numpy ufuncs (docs/MODELS.md), "
-            "or run without --device cuda") from None
+        for dev, host in zip(devs, hosts):
+            if host.size:
+                dev.copy_to_device(host, stream=stream)
+        _launch(kernel, scene, math.ceil(m / THREADS_PER_BLOCK), stream, devs)
+        out, status, counters = (d.copy_to_host(stream=stream) for d in devs[4:])
+        stream.synchronize()
+    finally:
+        _give_back(shapes, launch)
     back = np.empty_like(order)
     back[order] = np.arange(m)
-    out, status, counters = (d.copy_to_host(stream=stream) for d in (d_out, d_status,
-                                                                       d_counters))
-    stream.synchronize()
     return out[back], status[back], counters[back], time.perf_counter() - t0

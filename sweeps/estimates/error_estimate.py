@@ -43,8 +43,8 @@ REL_FLOOR = 1e-3
 
 def finer_numerics(plan: Plan) -> Numerics:
     """The next level up, or the same integrator at tolerances / 100 at the top. On the
-    CPU whatever the sweep's device: a dozen points, each on one GPU thread ~40x slower
-    than on a core (docs/GPU.md), would be a GPU sweep's tail."""
+    CPU whatever the sweep's device: a dozen points, each on one GPU thread 10-24x slower
+    than on a core (docs/GPU.md, an H200), would be a GPU sweep's tail."""
     level = FINER.get(plan.numerics.label)
     if level is not None:
         return numerics(plan.spec, float(plan.params[P.SIGMA0]), level)

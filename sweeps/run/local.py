@@ -17,15 +17,17 @@ from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun
                        show_reruns)
 from .sink import BlockSink
 
-# Blocks of a GPU sweep launched at a time (engine.gpu.run: a stream each): a launch lasts
-# as long as its slowest warp, and the launches beside it fill the SMs it leaves idle
+# Blocks of a GPU sweep launched at a time, at least (engine.gpu.run: a stream each; more
+# when more workers are asked for): a launch lasts as long as its slowest warp, and the
+# launches beside it can fill the SMs it leaves idle (not yet measured on a GPU)
 GPU_LAUNCHES = 4
 
 
 def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progress,
                      sample=None, warm_up: bool = True) -> None:
     """Compute ``todo`` on threads of this process, as many as ``compute`` asks for
-    (:attr:`sweeps.workers.compute.Compute.threads`; it opens nothing): the analysis paths
+    (:attr:`sweeps.workers.compute.Compute.threads`, at least GPU_LAUNCHES for a sweep on
+    the GPU; it opens nothing): the analysis paths
     (they cost microseconds per point), and a simulated sweep whose estimated work is
     below the cost of starting a cluster (sweeps.run.submit.small). The same task, journal
     and checks as on a cluster, the same longest-first order, the error sample's re-runs
