@@ -8,7 +8,8 @@ turns a CPU dispatcher into a device function), float64 throughout. What differs
 is only where a point's scratch lives: the CPU block kernel allocates it once per block with
 numpy, a GPU thread takes it from its local memory, shaped by the method's
 :attr:`engine.integrators.Stepper.shapes` and zeroed. The kernel's source is generated from
-those shapes (:func:`engine.gpu_source.kernel_source`), since ``cuda.local.array`` wants literal shapes.
+those shapes (:func:`engine.gpu_source.kernel_source`), since ``cuda.local.array`` wants
+literal shapes.
 
 Each thread reads its point's row of ``points``, overrides the four grid columns of a local
 copy of ``p`` and runs ``run_point`` with its own settings record (the driver writes the

@@ -175,7 +175,8 @@ def launch_variants(label: str, case, args) -> dict:
                   + f" {warm:.1f} s |", flush=True)
     finally:
         gpu.THREADS_PER_BLOCK, gpu.MAX_REGISTERS = defaults
-        gpu.block_kernel.cache_clear()
+        if compiled_cap != defaults[1]:   # the kernel of the default cap again
+            gpu.block_kernel.cache_clear()
     return rates
 
 
