@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import threading
 import time
+from contextlib import contextmanager
 
 from ..workers import task
 from ..workers.cluster import NOTICE_AFTER_S
@@ -31,10 +32,12 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, p
     (they cost microseconds per point), and a simulated sweep whose estimated work is
     below the cost of starting a cluster (sweeps.run.submit.small). The same task, journal
     and checks as on a cluster, the same longest-first order, the error sample's re-runs
-    (``sample``) among the blocks; the kernel is compiled once first (``warm_up``). Times
-    go to ``sink.timings``."""
+    (``sample``) among the blocks (on a GPU sweep beside them, on threads of their own:
+    :func:`_rerun_pool`); the kernel is compiled once first (``warm_up``). Times go to
+    ``sink.timings``."""
     gpu = plan.numerics.settings.device == "cuda"
-    with ThreadClient(max(compute.threads, GPU_LAUNCHES if gpu else 1)) as pool:
+    with ThreadClient(max(compute.threads, GPU_LAUNCHES if gpu else 1)) as pool, \
+            _rerun_pool(pool, compute.threads, gpu) as reruns_on:
         if plan.path == "simulate" and warm_up:
             t = time.perf_counter()
             if not _warm_up_here(plan, sink, progress):
@@ -43,11 +46,26 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, p
         bar = points_bar(plan, todo, progress)   # its clock starts with the points
         t = time.perf_counter()
         sink.started()
-        _dispatch_local(pool, plan, todo, sink, bar, sample)
+        _dispatch_local(pool, plan, todo, sink, bar, sample, reruns_on)
         sink.timings["compute_s"] = time.perf_counter() - t
         bar.close()
         if plan.path == "simulate":
-            finish_estimate(plan, pool, todo, sink, sample, progress)
+            finish_estimate(plan, reruns_on, todo, sink, sample, progress)
+
+
+@contextmanager
+def _rerun_pool(pool: ThreadClient, threads: int, gpu: bool):
+    """Where the error sample's re-runs go: ``pool`` itself, or, for a sweep on the GPU,
+    ``threads`` CPU threads of their own. The re-runs run on the CPU whatever the sweep's
+    device (sweeps.estimates.error_estimate.finer_numerics), and the GPU's launches hold
+    every thread of ``pool`` while they wait on the device, so in ``pool`` a re-run waited
+    for a launch to end: on an H200 a 1,000 x 1,000 map's 12 re-runs had not started 125 s
+    into its launches (docs/GPU.md)."""
+    if not gpu:
+        yield pool
+        return
+    with ThreadClient(threads) as own:
+        yield own
 
 
 def _warm_up_here(plan: Plan, sink: BlockSink, progress) -> bool:
@@ -73,9 +91,15 @@ def _warm_up_here(plan: Plan, sink: BlockSink, progress) -> bool:
 
 
 def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
-                    sample=None) -> None:
+                    sample=None, reruns_on=None) -> None:
     """:func:`_dispatch` on threads: one task per thread (plus one) in flight, longest
-    expected first, the re-runs among the blocks; each finished block journaled."""
+    expected first, the re-runs among the blocks; each finished block journaled. Re-runs
+    on a pool of their own (``reruns_on``, :func:`_rerun_pool`) are all submitted first
+    and take no place among the blocks."""
+    apart = reruns_on is not None and reruns_on is not pool
+    if apart and sample is not None:
+        while sample.submit_next(reruns_on):
+            pass
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
     queue = list(reversed(longest_first(todo, cost_of)))
     inflight: dict = {}   # future -> block
@@ -84,9 +108,9 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
     while True:
         interrupt.check()
         stopping = sink.should_stop()
-        reruns = sample.pending() if sample is not None else []
+        reruns = sample.pending() if sample is not None and not apart else []
         while not stopping and len(inflight) + len(reruns) < window:
-            if rerun_first(sample, queue, cost_of):
+            if not apart and rerun_first(sample, queue, cost_of):
                 sample.submit_next(pool)
                 reruns.append(None)
                 continue
