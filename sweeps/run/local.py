@@ -1,8 +1,9 @@
 """Computing a run's blocks on threads of this process (:func:`run_blocks_local`): the
-analysis paths, which cost microseconds per point, and a simulated sweep whose estimated
-work is below the cost of starting a cluster (sweeps.run.submit.small). The engine's
-kernels release the GIL, so the threads compute side by side; the same task, journal,
-checks and order as on a cluster (sweeps.run.dispatch)."""
+analysis paths, which cost microseconds per point, a simulated sweep whose estimated
+work is below the cost of starting a cluster (sweeps.run.submit.small), and a sweep on
+this machine's GPU (a launch a thread; the error estimate's re-runs, CPU work, on threads
+of their own). The engine's kernels release the GIL, so the threads compute side by side;
+the same task, journal, checks and order as on a cluster (sweeps.run.dispatch)."""
 from __future__ import annotations
 
 import threading
@@ -28,7 +29,7 @@ def run_blocks_local(plan: Plan, todo: list[int], sink: BlockSink, compute, *, p
                      sample=None, warm_up: bool = True) -> None:
     """Compute ``todo`` on threads of this process, as many as ``compute`` asks for
     (:attr:`sweeps.workers.compute.Compute.threads`, at least GPU_LAUNCHES for a sweep on
-    the GPU; it opens nothing): the analysis paths
+    the GPU; it opens no cluster): the analysis paths
     (they cost microseconds per point), and a simulated sweep whose estimated work is
     below the cost of starting a cluster (sweeps.run.submit.small). The same task, journal
     and checks as on a cluster, the same longest-first order, the error sample's re-runs
@@ -64,7 +65,7 @@ def _rerun_pool(pool: ThreadClient, threads: int, gpu: bool):
     if not gpu:
         yield pool
         return
-    with ThreadClient(threads) as own:
+    with ThreadClient(threads, name="ditherlab-rerun") as own:
         yield own
 
 
@@ -97,7 +98,7 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
     on a pool of their own (``reruns_on``, :func:`_rerun_pool`) are all submitted first
     and take no place among the blocks."""
     apart = reruns_on is not None and reruns_on is not pool
-    if apart and sample is not None:
+    if apart and sample is not None and not sink.should_stop():
         while sample.submit_next(reruns_on):
             pass
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}

@@ -14,11 +14,12 @@ from concurrent.futures import FIRST_COMPLETED, Future, ThreadPoolExecutor, wait
 
 
 class ThreadClient:
-    """``threads`` worker threads behind a dask-like ``submit`` (``pure`` ignored)."""
+    """``threads`` worker threads (named ``name_k``) behind a dask-like ``submit``
+    (``pure`` ignored)."""
 
-    def __init__(self, threads: int):
+    def __init__(self, threads: int, name: str = "ditherlab-block"):
         self.threads = max(1, int(threads))
-        self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix="ditherlab-block")
+        self._pool = ThreadPoolExecutor(self.threads, thread_name_prefix=name)
 
     def submit(self, fn, *args, pure=None, **kwargs) -> Future:
         return self._pool.submit(fn, *args, **kwargs)

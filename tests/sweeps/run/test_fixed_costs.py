@@ -91,20 +91,21 @@ def test_a_gpu_sweeps_reruns_run_beside_its_launches_not_behind_them(monkeypatch
     the re-runs (CPU work, finer_numerics) waited behind them: on an H200 a 1,000 x 1,000
     map's 12 re-runs had not started 125 s into its launches. They now run on threads of
     their own (local._rerun_pool), all submitted before the first launch: here every
-    launch waits until every re-run is back, which only they can be. (The old dispatch
-    sent the costliest re-runs first and then filled its window with launches: 5 of the
-    12 re-runs were back, the rest waited behind the held launches, until the suite's
-    timeout.)"""
+    launch waits until every re-run is back, which only they can be, and the re-runs run
+    on the re-run threads. (The old dispatch sent only the re-runs costlier than a launch
+    first and then filled its window with launches: the rest waited behind the held
+    launches for ever; the finally below releases them if the dispatch fails so.)"""
     plan = make_plan(parse_spec({**SPEC, "device": "cuda"}))
     assert plan.numerics.settings.device == "cuda"
     sample = SampleRuns(plan)
     reruns_back = threading.Event()
-    lock, back, launches = threading.Lock(), [], []
+    lock, back, launches, where = threading.Lock(), [], [], set()
 
     def compute(scene, points, p, settings, index=None, sizes=None, kind=None):
         if kind == "rerun":
             with lock:
                 back.append(int(np.asarray(index)[0]))
+                where.add(threading.current_thread().name.rsplit("_", 1)[0])
                 if len(back) == len(sample.order):
                     reruns_back.set()
         else:   # a launch: its thread held until the device is done
@@ -119,8 +120,12 @@ def test_a_gpu_sweeps_reruns_run_beside_its_launches_not_behind_them(monkeypatch
     with ThreadClient(local.GPU_LAUNCHES) as pool, \
             local._rerun_pool(pool, 2, gpu=True) as reruns_on:
         assert reruns_on is not pool
-        local._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample, reruns_on)
+        try:
+            local._dispatch_local(pool, plan, todo, _Sink(), _Bar(), sample, reruns_on)
+        finally:
+            reruns_back.set()   # (a failed dispatch leaves no launch held: the pool closes)
     assert sorted(back) == sorted(int(i) for i in sample.index)
+    assert where == {"ditherlab-rerun"}, where
     assert len(launches) == len(todo)
     with ThreadClient(2) as pool, local._rerun_pool(pool, 2, gpu=False) as reruns_on:
         assert reruns_on is pool   # on the CPU the re-runs go among the blocks, as before
