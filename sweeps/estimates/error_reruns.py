@@ -15,10 +15,12 @@ from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
+from ..workers.deaths import allowed_failures, crash_line, died_running
 from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
 GATHER_TICK_S = 0.05   # how often the re-runs still running are looked at
+RESCUE_S = 2.0         # how often gather() looks for re-runs whose workers have all gone
 
 
 def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
@@ -64,6 +66,9 @@ class SampleRuns:
         self.costs = [float(cost[i]) for i in self.order]   # in submission order
         self.futures: dict[int, object] = {}   # re-run -> its task (shared by a group)
         self.groups: list[tuple[object, list[int]]] = []   # (task, its re-runs), in order
+        self.allowed: dict[object, frozenset] = {}   # task -> the workers it may run on
+        self.deaths: dict[int, int] = {}   # group -> workers that died running it
+        self.given_up = ""                   # why a re-run was given up (gather raises it)
 
     def pending(self) -> list:
         """The tasks not finished."""
@@ -105,12 +110,43 @@ class SampleRuns:
             total += self.costs[k + n]
             n += 1
         group = [int(i) for i in self.order[k:k + n]]
-        future = client.submit(task.compute_block, self.scene, self.points[group],
-                               self.plan.params, self.finer.settings, self.index[group],
-                               [1] * n, kind="rerun", pure=False)   # (the hooks: a re-run each)
+        future = self._submit(client, group)
         self.futures.update((i, future) for i in group)
         self.groups.append((future, group))
         return True
+
+    def _submit(self, client, group: list[int]):
+        """One task of the re-runs ``group`` (on the matching workers of a dask cluster:
+        the task remembers which, for :meth:`rescue`)."""
+        check = getattr(client, "check", None)   # (a MatchedClient; not ThreadClient)
+        workers = list(check.wait()) if check is not None else None
+        extra = {"workers": workers} if workers is not None else {}
+        future = client.submit(task.compute_block, self.scene, self.points[group],
+                               self.plan.params, self.finer.settings, self.index[group],
+                               [1] * len(group), kind="rerun", pure=False,   # (the hooks:
+                               **extra)                                      # a re-run each)
+        if workers is not None:
+            self.allowed[future] = frozenset(workers)
+        return future
+
+    def rescue(self, client, good: dict) -> None:
+        """Submit again the re-run tasks whose allowed workers have all gone (batch jobs
+        ended, or workers that died running them: sweeps.workers.deaths), on the workers
+        in ``good`` now. A group whose tasks killed more workers than dask allows is given
+        up (``given_up``: :meth:`gather` raises it, and the estimate says so in its
+        warning)."""
+        orphans = [(g, f) for g, (f, _) in enumerate(self.groups)
+                   if f in self.allowed and not f.done() and not self.allowed[f] & good.keys()]
+        died = died_running(client, [f for _, f in orphans])
+        for g, future in orphans:
+            self.deaths[g] = self.deaths.get(g, 0) + died.get(future.key, 0)
+            client.cancel(future)
+            if self.deaths[g] > allowed_failures():
+                self.given_up = f"a re-run was given up: {crash_line(self.deaths[g])}"
+                continue
+            group = self.groups[g][1]
+            self.groups[g] = (self._submit(client, group), group)
+            self.futures.update((i, self.groups[g][0]) for i in group)
 
     def gather(self, client, tick=None, idle=None) -> BlockRecord:
         """Every re-run's result, in sample order, as one record (the rest submitted
@@ -118,15 +154,20 @@ class SampleRuns:
         between (a progress bar's keep-alive)."""
         while self.submit_next(client):
             pass
-        futures = [self.futures[i] for i in range(len(self.order))]
-        seen = 0
-        while seen < len(futures):   # dask's and concurrent.futures' alike
-            done = sum(f.done() for f in futures)
+        seen, looked = 0, time.monotonic()
+        while seen < len(self.order):   # dask's and concurrent.futures' alike
+            if self.allowed and time.monotonic() - looked > RESCUE_S:
+                self.rescue(client, client.check.matching())
+                looked = time.monotonic()
+            if self.given_up:
+                self.cancel(client)
+                raise RuntimeError(self.given_up)
+            done = sum(f.done() for f in (self.futures[i] for i in range(len(self.order))))
             for _ in range(done - seen):
                 if tick is not None:
                     tick()
             seen = done
-            if seen < len(futures):
+            if seen < len(self.order):
                 if idle is not None:
                     idle()
                 time.sleep(GATHER_TICK_S)

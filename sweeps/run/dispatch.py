@@ -12,8 +12,14 @@ import time
 
 import numpy as np
 
+from engine import status as S
+
+from store.record import BlockRecord
+
 from ..workers import task
+from ..workers.deaths import Deaths, crash_line, died_running, killed_worker
 from ..workers.matching import matched
+from ..version import results_fingerprint
 from ..planning.plan import Plan, blocks_per_task, min_task_s, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import interrupt
@@ -114,6 +120,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
     good: dict[str, int] = {}
     looked = -1e9
+    deaths = Deaths()          # worker processes that died running a block (a crash)
 
     def fill() -> None:
         window, groups = sum(good.values()) + 1, []
@@ -127,7 +134,10 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             if not queue:
                 break
             k = blocks_per_task(window - 1, cost[0] / max(cost[1], 1), len(queue))
-            groups.append([queue.pop() for _ in range(min(k, len(queue)))])
+            group = [queue.pop()]   # (a block whose task killed a worker goes alone)
+            while len(group) < k and queue and not {group[0], queue[-1]} & deaths.alone:
+                group.append(queue.pop())
+            groups.append(group)
         if groups:   # one message to the scheduler for them all: a submit each costs
             # 3.3x the submitter's CPU (5.4 against 1.7 ms a task; scripts/bench_scale.py)
             allowed, n = list(good), len(groups)
@@ -149,7 +159,11 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         interrupt.check()   # a Ctrl-C that a dask callback swallowed (sweeps.run.interrupt)
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
-            _resubmit_orphans(client, inflight, good, queue)
+            given_up = _resubmit_orphans(client, inflight, good, queue, deaths)
+            if sample is not None:
+                sample.rescue(client, good)
+            if given_up:
+                _give_up(plan, given_up, deaths, sink, bar)
             if compute is not None:   # the re-runs still to come need workers too
                 compute.shrink(len(queue) + len(inflight) + outstanding(sample, filler))
         stopping = sink.should_stop()
@@ -162,10 +176,15 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             bar.keep_alive()
             sleep_until_one(done, WAKE_S)
             continue
-        finished = []
+        finished, given_up = [], []
         for f, result in done.next_batch(block=False):
             if f in inflight:   # (not: cancelled and submitted again)
                 group = inflight.pop(f)[0]
+                if killed_worker(f):   # dask gave it up: its workers kept dying
+                    again, lost = deaths.requeue(group, deaths.allowed + 1)
+                    queue.extend(again)
+                    given_up += lost
+                    continue
                 result = f.result() if f.status == "error" else result   # an error raises
                 finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
                 if not result.error:   # (a failed block's cost_s is zeros: not a price)
@@ -175,6 +194,17 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if finished:   # (not: only re-runs ended, which the estimate gathers)
             sink.many(finished)   # journaled as one group
             bar.update(sum(len(plan.blocks[b]) for b, _ in finished))
+        if given_up:
+            _give_up(plan, given_up, deaths, sink, bar)
+
+
+def _give_up(plan: Plan, blocks: list[int], deaths: Deaths, sink: BlockSink, bar) -> None:
+    """Journal ``blocks``, which kept killing their workers, as FAILED (sweeps.workers.deaths)."""
+    shapes = task.output_shapes(plan.scene.outputs)
+    sink.many([(b, BlockRecord.failed(plan.blocks[b], shapes, crash_line(deaths.of_block[b]),
+                                      S.FAILED, fingerprint=results_fingerprint()))
+               for b in blocks])
+    bar.update(sum(len(plan.blocks[b]) for b in blocks))
 
 
 def sleep_until_one(done, timeout: float) -> None:
@@ -237,14 +267,23 @@ def split_result(record, group: list[int], sizes: list[int]) -> list[tuple[int, 
     return list(zip(group, record.split(sizes))) if len(group) > 1 else [(group[0], record)]
 
 
-def _resubmit_orphans(client, inflight: dict, good: dict, queue: list) -> None:
-    """Blocks restricted to workers that have all gone (batch jobs ended) wait for ever
-    in dask: cancel them and put them first in the queue."""
-    for future, (blocks, allowed) in list(inflight.items()):
-        if not future.done() and not allowed & good.keys():
-            client.cancel(future)
-            del inflight[future]
-            queue.extend(blocks)
+def _resubmit_orphans(client, inflight: dict, good: dict, queue: list,
+                      deaths: Deaths) -> list[int]:
+    """Blocks restricted to workers that have all gone (batch jobs ended, or workers that
+    died running them and came back under new addresses) wait for ever in dask: cancel
+    them and put them first in the queue, counting the deaths (``deaths``). Returns the
+    blocks given up (sweeps.workers.deaths)."""
+    orphans = [f for f, (_, allowed) in inflight.items()
+               if not f.done() and not allowed & good.keys()]
+    died = died_running(client, orphans)
+    given_up = []
+    for future in orphans:
+        blocks = inflight.pop(future)[0]
+        client.cancel(future)
+        again, lost = deaths.requeue(blocks, died.get(future.key, 0))
+        queue.extend(again)
+        given_up += lost
+    return given_up
 
 
 def points_bar(plan: Plan, todo: list[int], progress):

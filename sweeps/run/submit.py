@@ -42,9 +42,8 @@ from ..version import results_fingerprint
 
 log = logging.getLogger("ditherlab")
 
-# A local cluster's start, in seconds of its workers' time: two single-threaded workers
-# were up and warm 1.0 s after the submitter asked for them (issue 37, a quiet 2-core AMD
-# EPYC, kernel cache warm). A sweep expected to take less per worker runs on threads here.
+# A local cluster's start, in seconds of its workers' time: two workers were up and warm
+# 1.0 s after the submitter asked (issue 37, a quiet 2-core AMD EPYC, kernel cache warm).
 IN_PROCESS_BELOW_S = 1.0
 
 
@@ -130,13 +129,15 @@ class Submission:
     def runs_here(self, todo: list[int]) -> bool:
         """On threads of this process: a sweep on this machine's GPU, the analysis paths
         unless a scheduler is named, and a simulated sweep priced below a local cluster's
-        start (not when the cluster is open already, serve's, nor with a dashboard)."""
+        start (not when the cluster is open already, serve's, nor with a dashboard); never
+        a brought model on the CPU (a crash in it costs a worker: sweeps.workers.deaths)."""
         c = self.compute
         if self.plan.numerics.settings.device == "cuda":   # else a cluster's GPU workers
             return c.kind == LOCAL
-        return (self.plan.path != "simulate" and c.kind != SCHEDULER) or (
-            c.kind == LOCAL and not c.dashboard and not c.is_open and
-            small(self.plan, todo, c.threads))
+        return not self.plan.scene.digests and (
+            (self.plan.path != "simulate" and c.kind != SCHEDULER) or
+            (c.kind == LOCAL and not c.dashboard and not c.is_open and
+             small(self.plan, todo, c.threads)))
 
     def start_early(self, todo: list[int] | None) -> None:
         """Start the cluster of our own a simulated run of ``todo`` (None: not known yet, a
@@ -288,11 +289,10 @@ class Submission:
 
 
 def small(plan: Plan, todo: list[int], threads: int) -> bool:
-    """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: its blocks
-    still to compute and the error sample's re-runs), spread over ``threads``, is below
-    IN_PROCESS_BELOW_S, the cost of starting a local cluster: it runs on threads of this
-    process (sweeps.run.local.run_blocks_local). Not a refined sweep (its later levels are
-    unknown)."""
+    """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: blocks to
+    compute, the error sample's re-runs) over ``threads`` is below IN_PROCESS_BELOW_S, the
+    cost of a local cluster's start: it runs on threads here (sweeps.run.local). Not a
+    refined sweep (its later levels are unknown)."""
     if plan.spec.refine:
         return False
     index = np.concatenate([plan.blocks[b] for b in todo]) if todo else np.arange(0)

@@ -39,7 +39,7 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
     from distributed import Client, LocalCluster
 
     from .local_start import local_settings
-    from .matching import matched
+    from .matching import LOCAL_WORKERS_BACK_S, matched
 
     if scheduler:
         client = Client(scheduler, timeout="20s", set_as_default=False)
@@ -66,7 +66,9 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
         if dashboard:
             log.info("dask dashboard: %s", client.dashboard_link)
         client.register_plugin(_ignore_sigint_plugin())   # ... and workers restarted later
-        yield matched(client)
+        client = matched(client)
+        client.check.back_within_s = LOCAL_WORKERS_BACK_S   # our nannies restart the dead
+        yield client
 
 
 class EarlyStart:

@@ -32,10 +32,19 @@ log = logging.getLogger("ditherlab")
 
 WAIT_TICK_S = 0.25   # how often a run waiting for a matching worker looks again
 SHOWN = 3            # foreign workers named in one line (the rest counted)
+# A local cluster's nannies start a dead worker again within seconds (2-3 s here, with the
+# kernel in the cache); one that cannot start again (its environment changed under it, e.g.
+# a folder named like one of our packages appeared on its path) leaves the run without
+# workers: past this, the run ends in one line instead of waiting for ever.
+LOCAL_WORKERS_BACK_S = 60.0
 
 
 class ForeignWorkersError(UserError):
     """Workers are connected, and none runs this submitter's engine."""
+
+
+class WorkersGoneError(UserError):
+    """Every worker of our own local cluster died and none came back."""
 
 
 class NoGPUWorkersError(UserError):
@@ -61,6 +70,8 @@ class WorkerCheck:
         self.told: set[str] = set()
         self.gpu = False                        # the run's blocks need a GPU worker
         self.gpus: dict[str, float] = {}        # address -> its GPU resource, once asked
+        self.back_within_s: float | None = None  # our local cluster: LOCAL_WORKERS_BACK_S
+        self.none_since: float | None = None     # when the last worker left (none since)
 
     def expect(self, models, gpu: bool = False) -> None:
         """The models this run brings by import path (engine.registry): a worker must also
@@ -79,6 +90,7 @@ class WorkerCheck:
         seen for the first time are asked now; a foreign one is named once (a warning).
         Raises :class:`ForeignWorkersError` when workers are connected and none matches."""
         nthreads = self.client.nthreads()
+        self._check_gone(bool(nthreads))
         new = [a for a in nthreads if a not in self.seen]
         if new:
             self.seen.update(self._ask(new))
@@ -93,6 +105,20 @@ class WorkerCheck:
             self.told.update(fresh)
             log.warning("%s", self.line(fresh, alone=False))
         return self._with_gpu(good) if self.gpu else good
+
+    def _check_gone(self, any_worker: bool) -> None:
+        """WorkersGoneError when our local cluster has had no worker for longer than
+        ``back_within_s`` (a batch or external cluster may wait for its workers at will)."""
+        if any_worker or self.back_within_s is None:
+            self.none_since = None
+            return
+        now = time.monotonic()
+        self.none_since = self.none_since or now
+        if now - self.none_since > self.back_within_s:
+            raise WorkersGoneError(
+                f"every local dask worker died and none has started again for "
+                f"{self.back_within_s:.0f} s (a worker that cannot start prints why above); "
+                "the journal keeps every finished block: fix that and submit again")
 
     def _with_gpu(self, good: dict[str, int]) -> dict[str, int]:
         """The workers of ``good`` with a GPU resource; :class:`NoGPUWorkersError` when

@@ -1,0 +1,107 @@
+"""A brought law that crashes its process (a write far outside its arrays: numba checks no
+bounds) at one point of a sweep (sweeps.workers.deaths). Before, the sweep hung with its
+progress bar ticking (a 164-point sweep: 0 points after 5 minutes), because its tasks may
+run only on the workers that matched when they were submitted and a restarted worker has a
+new address; a small sweep ran in the submitter, which died with a segmentation fault. Now
+the crash costs workers, not the submitter: the block is given up as FAILED in one warning
+line once its tasks killed more workers than dask allows, the other points are kept, the
+error estimate says why it has no number, and a second submit computes only that block."""
+from __future__ import annotations
+
+import os
+import textwrap
+
+import numpy as np
+import pytest
+import xarray as xr
+
+from tests.helpers import ditherlab
+
+pytestmark = [pytest.mark.long, pytest.mark.subprocess, pytest.mark.cluster]
+
+LAW = '''
+from engine.contract import FrictionLaw, LawKernels, Param
+
+
+class Crasher(FrictionLaw):
+    """Dahl-like; writes far outside its states at W > crash_at (a segmentation fault)."""
+    name = "crasher"
+    params = {"crash_at": Param(0.5, "1", "W above which it crashes", lo=0.0)}
+    phases = "band"
+
+    def n_states(self, size):
+        return 1
+
+    def build(self, b):
+        Z = b.z0
+        fc, s0, iw, ic = b.ix["fc"], b.ix["sigma0"], b.ix["W"], b.ix["crash_at"]
+
+        @b.jit(inline="always")
+        def rates(u, y, dy, hold, p):
+            dy[Z] = u * (1.0 - p[s0] * y[Z] * (1.0 if u >= 0 else -1.0) / p[fc])
+            if p[iw] > p[ic]:
+                dy[Z + 100000000000] = 1.0
+            return p[s0] * y[Z]
+
+        @b.jit(inline="always")
+        def force(u, y, hold, p):
+            return p[s0] * y[Z], 1.0
+
+        @b.jit(inline="always")
+        def switches(u, y, hold, p, g):
+            g[0] = u
+
+        @b.jit(inline="always")
+        def init(p, y):
+            y[Z] = 0.0
+
+        @b.jit(inline="always")
+        def scales(p, out):
+            out[Z] = p[fc] / p[s0]
+
+        return LawKernels(rates, force, 1, switches, init, scales)
+'''
+
+SPEC = '''
+name = "crash"
+friction = "crashlab:Crasher"
+dither = "sine-velocity"
+accuracy = "draft"
+outputs = ["v_mean"]
+[grid]
+W = [0.0, 0.2, 1.0]
+omega = [100.0]
+'''
+
+
+def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the_rest(tmp_path):
+    (tmp_path / "crashlab.py").write_text(textwrap.dedent(LAW))
+    spec = tmp_path / "crash.toml"
+    spec.write_text(SPEC)
+    store = tmp_path / "cubes"   # (not "store": on PYTHONPATH it would hide the package)
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg"}
+
+    out = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
+    assert out.returncode == 1, (out.returncode, out.stdout, out.stderr[-3000:])
+    assert "Traceback" not in out.stderr and "Segmentation" not in out.stderr, out.stderr
+    crashed = [ln for ln in out.stderr.splitlines() if "worker processes died" in ln]
+    assert len(crashed) == 1, out.stderr
+    assert crashed[0].startswith("ditherlab: warning: block ") and " failed: " in crashed[0]
+    assert "1 of 3 points failed" in out.stderr
+
+    [cube_file] = store.glob("*/cube.nc")
+    with xr.open_dataset(cube_file) as cube:
+        status = cube["status"].values.ravel()
+        v_mean = cube["v_mean"].values.ravel()
+        W = np.broadcast_to(cube["W"].values[:, None, None, None], cube["status"].shape).ravel()
+    assert list(status[W > 0.5]) == [2] and np.isnan(v_mean[W > 0.5]).all()   # FAILED
+    assert (status[W < 0.5] == 0).all() and np.isfinite(v_mean[W < 0.5]).all()
+
+    query = ditherlab("query", "crash", "--var", "v_mean", "--format", "csv", store=store,
+                      env=env)
+    assert query.returncode == 0, query.stderr
+    assert "the error estimate could not be computed" in query.stderr   # its sample has W = 1
+    assert "worker processes died" in query.stderr
+
+    again = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
+    assert again.returncode == 1 and "ran 1 blocks" in again.stdout, (again.stdout, again.stderr)

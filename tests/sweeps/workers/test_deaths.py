@@ -1,0 +1,50 @@
+"""What the dispatch does with a task whose worker processes died running it
+(sweeps.workers.deaths), and how long a run waits for its own local cluster's workers to
+come back (sweeps.workers.matching.WorkerCheck). The whole path, with a law that crashes its
+worker, is tests/e2e/test_crashing_model.py."""
+from __future__ import annotations
+
+import pytest
+
+from sweeps.workers import deaths as D
+from sweeps.workers import matching
+
+
+def test_a_task_of_several_blocks_that_killed_a_worker_is_split_and_nobody_is_blamed():
+    d = D.Deaths()
+    again, lost = d.requeue([3, 4, 5], died=2)
+    assert (again, lost) == ([3, 4, 5], [])
+    assert d.alone == {3, 4, 5} and d.of_block == {}
+
+
+def test_a_block_is_given_up_once_its_tasks_killed_more_workers_than_dask_allows():
+    d = D.Deaths()
+    assert d.allowed == 3   # distributed.scheduler.allowed-failures, dask's default
+    assert d.requeue([7], died=0) == ([7], [])   # left its workers (batch jobs ended): no death
+    assert d.requeue([7], died=2) == ([7], [])   # both workers of a local cluster died
+    assert d.requeue([7], died=1) == ([7], [])   # 3: still allowed
+    assert d.requeue([7], died=1) == ([], [7])   # 4 > 3: given up
+    assert 7 in d.alone and d.of_block[7] == 4
+    assert D.crash_line(4).startswith("4 worker processes died computing it")
+
+
+class _NoWorkers:
+    def nthreads(self):
+        return {}
+
+
+def test_a_local_cluster_without_workers_ends_the_run_after_its_bound(monkeypatch):
+    clock = iter([100.0, 130.0, 161.0])
+    monkeypatch.setattr(matching.time, "monotonic", lambda: next(clock))
+    check = matching.WorkerCheck(_NoWorkers())
+    check.back_within_s = 60.0
+    assert check.matching() == {}   # t = 100: none since now
+    assert check.matching() == {}   # t = 130: 30 s
+    with pytest.raises(matching.WorkersGoneError, match="none has started again for 60 s"):
+        check.matching()            # t = 161: 61 s
+
+
+def test_other_clusters_wait_for_their_workers_at_will(monkeypatch):
+    monkeypatch.setattr(matching.time, "monotonic", lambda: pytest.fail("no clock needed"))
+    check = matching.WorkerCheck(_NoWorkers())   # a batch or external cluster: no bound
+    assert check.matching() == {} and check.matching() == {}
