@@ -78,3 +78,61 @@ def where(exc: BaseException, module=None) -> str:
             continue
         return f" (at {path.name} line {frame.lineno})"
     return ""
+
+
+# The child of :func:`isolated`: sys.path, then (fn, args) from stdin; ("ok", value) or
+# ("raised", exception) pickled into the file named by argv[1] (stdout is the user's).
+_CHILD = """
+import pickle, sys
+stdin = sys.stdin.buffer
+sys.path[:] = pickle.load(stdin)
+try:
+    fn, args = pickle.load(stdin)
+    out = ("ok", fn(*args))
+except BaseException as exc:
+    out = ("raised", exc)
+try:
+    data = pickle.dumps(out)
+except Exception:
+    data = pickle.dumps(("raised", RuntimeError(f"{type(out[1]).__name__}: {out[1]}")))
+with open(sys.argv[1], "wb") as fh:
+    fh.write(data)
+"""
+
+
+def isolated(who: str, fn, *args):
+    """``fn(*args)`` in a child Python process, for code a user brings: numba checks no
+    bounds, so a model that reads or writes outside its arrays can kill the process that
+    runs it with a segmentation fault -- ``ditherlab plan`` and ``submit`` died so at the
+    spec's first-step check, with no line at all. Here the child dies instead, and the
+    crash is one :class:`ModelError` line naming ``who``. ``fn`` and ``args`` must pickle
+    (``fn`` by its module and name); ``fn``'s exceptions are raised again here (its
+    ModelError lines unchanged), its value returned. The child has this process's
+    environment and ``sys.path`` (a user's module found from the current folder too); its
+    output is shown only when it ends without a result. Costs a Python start (~1 s)."""
+    import pickle
+    import signal
+    import subprocess
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="ditherlab-isolated-") as tmp:
+        result = Path(tmp) / "result.pickle"
+        proc = subprocess.run([sys.executable, "-c", _CHILD, str(result)],
+                              input=pickle.dumps(list(sys.path)) + pickle.dumps((fn, args)),
+                              capture_output=True)
+        if proc.returncode < 0:
+            try:
+                name = signal.Signals(-proc.returncode).name
+            except ValueError:
+                name = f"signal {-proc.returncode}"
+            raise ModelError(f"{who}: the process running it died ({name}): a crash in "
+                             "compiled code, not an exception -- a read or write outside "
+                             "its arrays? numba checks no bounds")
+        if not result.exists():
+            said = proc.stderr.decode(errors="replace").strip().splitlines()
+            raise ModelError(f"{who}: the process running it ended (exit {proc.returncode}) "
+                             f"without a result: {said[-1] if said else 'no message'}")
+        status, value = pickle.loads(result.read_bytes())
+    if status == "raised":
+        raise value
+    return value

@@ -12,14 +12,23 @@ def _check_not_shadowed(*names: str) -> None:
     """With an editable install (``pip install -e``), a folder named ``store`` or
     ``engine`` in the folder of the running script (or the current folder under
     ``python -m``) is found first, as an empty namespace package, and hides ditherlab's
-    own package: the run would fail later with a puzzling AttributeError. Say it now."""
+    own package (so does one on ``$PYTHONPATH``, e.g. a store named ``store`` there): the run
+    would fail later with a puzzling AttributeError. Say it now: an ImportError, or from
+    the ``ditherlab`` command one line and exit 2 (it is raised before the command's own
+    one-line handler exists)."""
+    import sys
+
     for name in names:
         spec = _util.find_spec(name)
         if spec is not None and spec.origin is None and spec.submodule_search_locations:
             where = ", ".join(spec.submodule_search_locations)
-            raise ImportError(f"the folder {where} hides ditherlab's '{name}' package (an "
-                              f"editable install looks in the script's folder first): rename "
-                              f"that folder or run from another folder")
+            line = (f"the folder {where} hides ditherlab's '{name}' package (Python finds it "
+                    f"first: the script's folder, the current one under -m, or $PYTHONPATH): "
+                    f"rename that folder or run from another folder")
+            if sys.argv and sys.argv[0].rsplit("/", 1)[-1] == "ditherlab":
+                print(f"ditherlab: {line}", file=sys.stderr)
+                raise SystemExit(2)
+            raise ImportError(line)
 
 
 _check_not_shadowed("store", "engine")

@@ -24,6 +24,8 @@ import os
 import sys
 from contextlib import contextmanager
 
+from engine.contract import ModelError
+
 from ..errors import EXIT_FAILED, EXIT_INTERRUPTED, EXIT_REFUSED, Interrupted, SpecError, UserError
 from ..exports import MAPS, QUERY_FORMATS
 from ..workers.batch import BATCH_KINDS
@@ -177,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
     with _one_line_warnings(verbosity):
         try:
             return args.func(args)
-        except SpecError as exc:
+        except (SpecError, ModelError) as exc:   # (a brought model's fault: a crash in plan)
             return _fail(exc, EXIT_REFUSED)
         except (UserError, Interrupted) as exc:
             if exc.exit_status == EXIT_INTERRUPTED:

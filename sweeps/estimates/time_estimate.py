@@ -127,7 +127,21 @@ def estimate(spec: Spec, level: str, workers: int = 2) -> Estimate:
 
 
 def estimates(spec: Spec, workers: int = 2) -> list[Estimate]:
-    """One estimate per accuracy level (the analysis paths have a single level)."""
+    """One estimate per accuracy level (the analysis paths have a single level). A spec
+    that brings a model is calibrated in a child process: its code may crash the process
+    that runs it (engine.user_code.isolated: one ModelError line)."""
+    from engine import registry
+
+    brought = [r for r in (spec.friction, spec.system) if registry.is_import_path(r)]
+    if brought:
+        from engine.user_code import isolated
+
+        return isolated(f"{' and '.join(brought)} (the time estimate's sample points)",
+                        _estimates, spec, workers)
+    return _estimates(spec, workers)
+
+
+def _estimates(spec: Spec, workers: int) -> list[Estimate]:
     if spec.method != "simulate":
         return [estimate(spec, "standard", workers)]
     return [estimate(spec, level, workers) for level in LEVELS]

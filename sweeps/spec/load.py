@@ -28,6 +28,7 @@ parses.
 """
 from __future__ import annotations
 
+import functools
 import json
 import math
 import warnings
@@ -138,7 +139,6 @@ def _probe_brought_models(spec: Spec) -> list[str]:
         return []
     from engine.contract import ModelError
     from engine.scene import Scene
-    from engine.systems import probe
 
     from .grid import base_params
 
@@ -150,10 +150,24 @@ def _probe_brought_models(spec: Spec) -> list[str]:
         scene = Scene.from_params(p, system=spec.system, friction=spec.friction,
                                   dither=g.dither, outputs=spec.outputs or (),
                                   sizes=spec.model_sizes)
-        probe(scene, p)
+        _probed(scene, p.tobytes())
     except ModelError as exc:
         return [str(exc)]
     return []
+
+
+@functools.lru_cache(maxsize=64)
+def _probed(scene, p_bytes: bytes) -> None:
+    """The probe, in a child process (a model that crashes kills that one, not this:
+    engine.user_code.isolated); once per process for each scene and parameters passed
+    (a command that looks a sweep up loads its spec again)."""
+    import numpy as np
+
+    from engine.systems import probe
+    from engine.user_code import isolated
+
+    isolated(f"friction {scene.friction!r} on system {scene.system!r}", probe, scene,
+             np.frombuffer(p_bytes).copy())
 
 
 class SpecWarning(UserWarning):

@@ -26,7 +26,7 @@ from engine.contract import FrictionLaw, LawKernels, Param
 class Crasher(FrictionLaw):
     """Dahl-like; writes far outside its states at W > crash_at (a segmentation fault)."""
     name = "crasher"
-    params = {"crash_at": Param(0.5, "1", "W above which it crashes", lo=0.0)}
+    params = {"crash_at": Param(0.5, "1", "W above which it crashes", lo=-1.0)}
     phases = "band"
 
     def n_states(self, size):
@@ -105,3 +105,22 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
 
     again = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
     assert again.returncode == 1 and "ran 1 blocks" in again.stdout, (again.stdout, again.stderr)
+
+
+@pytest.mark.parametrize("crash_at, where", [
+    (-1.0, "friction 'crashlab:Crasher' on system 'slider': the process running it died"),
+    (0.5, "crashlab:Crasher (the time estimate's sample points): the process running it died"),
+])
+def test_plan_of_a_law_that_crashes_is_one_line_exit_2(tmp_path, crash_at, where):
+    """At the spec's first-step check (crash_at < 0: every point crashes) and at the time
+    estimate's sample points (W = 1 is one of them): before, ``ditherlab plan`` died with a
+    segmentation fault (exit 139, not a line); now the user code runs in a child process."""
+    (tmp_path / "crashlab.py").write_text(textwrap.dedent(LAW))
+    spec = tmp_path / "crash.toml"
+    spec.write_text(SPEC + f"[params]\ncrash_at = {crash_at}\n")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg"}
+    out = ditherlab("plan", spec, env=env, timeout=300)
+    assert out.returncode == 2, (out.returncode, out.stdout, out.stderr[-3000:])
+    lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 + (crash_at < 0), out.stderr   # (a spec refusal has a heading)
+    assert where in lines[-1] and "(SIGSEGV): a crash in compiled code" in lines[-1], out.stderr

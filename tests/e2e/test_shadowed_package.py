@@ -50,9 +50,25 @@ def test_a_store_folder_beside_the_script_is_named_under_an_editable_install(tmp
     out = _run_beside_a_store_folder(tmp_path, pythonpath=None)
     assert out.returncode == 1, (out.stdout, out.stderr[-2000:])
     last = out.stderr.strip().splitlines()[-1]
-    assert last == (f"ImportError: the folder {tmp_path / 'store'} hides ditherlab's 'store' "
-                    "package (an editable install looks in the script's folder first): "
-                    "rename that folder or run from another folder"), out.stderr[-2000:]
+    assert last == (f"ImportError: {_LINE.format(where=tmp_path / 'store')}"), \
+        out.stderr[-2000:]
+
+
+_LINE = ("the folder {where} hides ditherlab's 'store' package (Python finds it first: the "
+         "script's folder, the current one under -m, or $PYTHONPATH): rename that folder or "
+         "run from another folder")
+
+
+def test_the_command_says_it_in_one_line_with_a_store_folder_on_pythonpath(tmp_path):
+    """A store named ``store`` in a folder on $PYTHONPATH (found when a test put a user's
+    law module beside its store): the ``ditherlab`` command printed the ImportError's
+    traceback; now one line, exit 2."""
+    (tmp_path / "store").mkdir()
+    bin_ = Path(sys.executable).parent / "ditherlab"
+    out = subprocess.run([str(bin_), "status"], cwd=tmp_path, capture_output=True, text=True,
+                         timeout=120, env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert out.returncode == 2, (out.stdout, out.stderr[-2000:])
+    assert out.stderr == f"ditherlab: {_LINE.format(where=tmp_path / 'store')}\n"
 
 
 def test_a_store_folder_beside_the_script_is_harmless_when_the_package_comes_first(tmp_path):
