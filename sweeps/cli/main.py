@@ -9,13 +9,12 @@ fault ends in one line.
     ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
     ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE
-    ditherlab plan SPEC.toml [--record]
+    ditherlab plan SPEC.toml [--record];  ditherlab --version;  -v / -q on every command
     ditherlab web [--bind HOST:PORT] [--token-file F];  serve --web HOST:PORT
-    ditherlab --version;  -v / -q on every command
 
-Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments) was refused,
-130 interrupted. Imports stay inside the commands: ``--help`` and ``status`` start in a
-fraction of a second (no dask, numba, xarray or matplotlib).
+Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments, a brought
+model's fault) was refused, 130 interrupted. Imports stay inside the commands: ``--help``
+and ``status`` start in a fraction of a second (no dask, numba, xarray or matplotlib).
 """
 from __future__ import annotations
 
@@ -155,9 +154,8 @@ def entry() -> int:
     """The ``ditherlab`` program: :func:`main`, then a quick exit. At interpreter shutdown
     Python's last garbage collections walk every object the run left, and numba's and
     llvmlite's number in the hundreds of thousands: 0.3-0.4 s of a 2 s command, measured
-    on the averaged Fig. 9 chart. ``gc.freeze()`` moves them out of the collector's
-    sight once the command is done (its files are closed, its work is on disk); nothing
-    else changes. Only for a whole process: tests call :func:`main` directly."""
+    on the averaged Fig. 9 chart. ``gc.freeze()`` hides them from the collector once the
+    command is done (its work is on disk). Tests call :func:`main` directly."""
     import gc
 
     try:
