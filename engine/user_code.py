@@ -93,11 +93,16 @@ except BaseException as exc:
     out = ("raised", exc)
 try:
     data = pickle.dumps(out)
+    pickle.loads(data)   # (an exception that pickles but cannot be made again)
 except Exception:
-    data = pickle.dumps(("raised", RuntimeError(f"{type(out[1]).__name__}: {out[1]}")))
+    from engine.contract import ModelError
+    data = pickle.dumps(("raised", ModelError(f"{type(out[1]).__name__}: {out[1]}")))
 with open(sys.argv[1], "wb") as fh:
     fh.write(data)
+import os
+os._exit(0)   # (the result is out: a crash while tearing down is not the user's)
 """
+CRASHES = {"SIGSEGV", "SIGBUS", "SIGILL", "SIGFPE", "SIGABRT"}   # a fault in compiled code
 
 
 def isolated(who: str, fn, *args):
@@ -120,19 +125,25 @@ def isolated(who: str, fn, *args):
         proc = subprocess.run([sys.executable, "-c", _CHILD, str(result)],
                               input=pickle.dumps(list(sys.path)) + pickle.dumps((fn, args)),
                               capture_output=True)
-        if proc.returncode < 0:
+        if result.exists():
+            try:
+                status, value = pickle.loads(result.read_bytes())
+            except Exception as exc:  # noqa: BLE001 -- one line, whatever came back
+                raise ModelError(f"{who}: its result could not be read back "
+                                 f"({one_line(exc)})") from None
+        elif proc.returncode < 0:
             try:
                 name = signal.Signals(-proc.returncode).name
             except ValueError:
                 name = f"signal {-proc.returncode}"
-            raise ModelError(f"{who}: the process running it died ({name}): a crash in "
-                             "compiled code, not an exception -- a read or write outside "
-                             "its arrays? numba checks no bounds")
-        if not result.exists():
+            why = ("a crash in compiled code, not an exception -- a read or write outside "
+                   "its arrays? numba checks no bounds" if name in CRASHES else
+                   "killed from outside: out of memory?")
+            raise ModelError(f"{who}: the process running it died ({name}): {why}")
+        else:
             said = proc.stderr.decode(errors="replace").strip().splitlines()
             raise ModelError(f"{who}: the process running it ended (exit {proc.returncode}) "
                              f"without a result: {said[-1] if said else 'no message'}")
-        status, value = pickle.loads(result.read_bytes())
     if status == "raised":
         raise value
     return value

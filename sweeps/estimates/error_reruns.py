@@ -16,6 +16,7 @@ from store.record import BlockRecord
 from . import error_estimate as errest
 from ..workers import task
 from ..workers.deaths import allowed_failures, crash_line, died_running
+from ..workers.matching import WorkersGoneError
 from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
@@ -33,6 +34,8 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
     t = time.perf_counter()
     try:
         estimate = _error_estimate(plan, client, cube, started, display)
+    except WorkersGoneError:   # the run ends: nothing left to compute it with
+        raise
     except Exception as exc:  # noqa: BLE001 -- say so in the cube, keep the results
         estimate = {"compared_with": None, "level": plan.numerics.label,
                     "sample_points": 0, "change": {}, "promise": {},
@@ -93,9 +96,10 @@ class SampleRuns:
         return sum(f.done() for f in self.futures.values())
 
     def next_cost(self) -> float | None:
-        """Expected seconds of the next re-run to submit; None when all are submitted."""
+        """Expected seconds of the next re-run to submit; None when all are submitted (or
+        one was given up: no more are)."""
         k = len(self.futures)
-        return self.costs[k] if k < len(self.order) else None
+        return self.costs[k] if k < len(self.order) and not self.given_up else None
 
     def submit_next(self, client, at_most_s: float = 0.0) -> bool:
         """Submit the next re-run as one task, with those after it while their summed
@@ -103,7 +107,7 @@ class SampleRuns:
         share a task, as blocks do (sweeps.planning.plan.blocks_per_task), instead of
         costing the submitter a task each. False when all are submitted."""
         k = len(self.futures)
-        if k == len(self.order):
+        if k == len(self.order) or self.given_up:
             return False
         n, total = 1, self.costs[k]
         while k + n < len(self.order) and total + self.costs[k + n] <= at_most_s:
@@ -115,11 +119,12 @@ class SampleRuns:
         self.groups.append((future, group))
         return True
 
-    def _submit(self, client, group: list[int]):
-        """One task of the re-runs ``group`` (on the matching workers of a dask cluster:
-        the task remembers which, for :meth:`rescue`)."""
+    def _submit(self, client, group: list[int], workers: list | None = None):
+        """One task of the re-runs ``group`` (on the matching workers of a dask cluster,
+        ``workers`` or those there now: the task remembers which, for :meth:`rescue`)."""
         check = getattr(client, "check", None)   # (a MatchedClient; not ThreadClient)
-        workers = list(check.wait()) if check is not None else None
+        if check is not None and workers is None:
+            workers = list(check.wait())
         extra = {"workers": workers} if workers is not None else {}
         future = client.submit(task.compute_block, self.scene, self.points[group],
                                self.plan.params, self.finer.settings, self.index[group],
@@ -132,20 +137,25 @@ class SampleRuns:
     def rescue(self, client, good: dict) -> None:
         """Submit again the re-run tasks whose allowed workers have all gone (batch jobs
         ended, or workers that died running them: sweeps.workers.deaths), on the workers
-        in ``good`` now. A group whose tasks killed more workers than dask allows is given
-        up (``given_up``: :meth:`gather` raises it, and the estimate says so in its
-        warning)."""
+        in ``good`` now (none: they wait). For a brought model, a group whose tasks killed
+        more workers than dask allows is given up (``given_up``: :meth:`gather` raises it,
+        and the estimate says so in its warning); deaths are not counted for the engine's
+        own models (sweeps.workers.deaths.Deaths)."""
+        if not good:
+            return
         orphans = [(g, f) for g, (f, _) in enumerate(self.groups)
                    if f in self.allowed and not f.done() and not self.allowed[f] & good.keys()]
-        died = died_running(client, [f for _, f in orphans])
+        counting = bool(self.plan.scene.digests)
+        died = died_running(client, [f for _, f in orphans]) if counting else {}
         for g, future in orphans:
-            self.deaths[g] = self.deaths.get(g, 0) + died.get(future.key, 0)
+            self.deaths[g] = self.deaths.get(g, 0) + (1 if died is None else
+                                                      died.get(future.key, 0))
             client.cancel(future)
-            if self.deaths[g] > allowed_failures():
+            if counting and self.deaths[g] > allowed_failures():
                 self.given_up = f"a re-run was given up: {crash_line(self.deaths[g])}"
                 continue
             group = self.groups[g][1]
-            self.groups[g] = (self._submit(client, group), group)
+            self.groups[g] = (self._submit(client, group, list(good)), group)
             self.futures.update((i, self.groups[g][0]) for i in group)
 
     def gather(self, client, tick=None, idle=None) -> BlockRecord:
@@ -166,7 +176,7 @@ class SampleRuns:
             for _ in range(done - seen):
                 if tick is not None:
                     tick()
-            seen = done
+            seen = max(seen, done)   # (a finished task whose worker died is not done again)
             if seen < len(self.order):
                 if idle is not None:
                     idle()

@@ -120,7 +120,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     # loop (23 ms per block with the machine loaded; scripts/bench_scale.py)
     good: dict[str, int] = {}
     looked = -1e9
-    deaths = Deaths()          # worker processes that died running a block (a crash)
+    deaths = Deaths(counting=bool(plan.scene.digests))   # workers a brought model killed
 
     def fill() -> None:
         window, groups = sum(good.values()) + 1, []
@@ -160,8 +160,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             given_up = _resubmit_orphans(client, inflight, good, queue, deaths)
-            if sample is not None:
-                sample.rescue(client, good)
+            for runs in (sample, filler):   # (the error sample's re-runs)
+                if runs is not None and good:
+                    runs.rescue(client, good)
             if given_up:
                 _give_up(plan, given_up, deaths, sink, bar)
             if compute is not None:   # the re-runs still to come need workers too
@@ -180,7 +181,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         for f, result in done.next_batch(block=False):
             if f in inflight:   # (not: cancelled and submitted again)
                 group = inflight.pop(f)[0]
-                if killed_worker(f):   # dask gave it up: its workers kept dying
+                if deaths.counting and killed_worker(f):   # dask gave up: workers kept dying
                     again, lost = deaths.requeue(group, deaths.allowed + 1)
                     queue.extend(again)
                     given_up += lost
@@ -275,12 +276,12 @@ def _resubmit_orphans(client, inflight: dict, good: dict, queue: list,
     blocks given up (sweeps.workers.deaths)."""
     orphans = [f for f, (_, allowed) in inflight.items()
                if not f.done() and not allowed & good.keys()]
-    died = died_running(client, orphans)
+    died = died_running(client, orphans) if deaths.counting else {}
     given_up = []
     for future in orphans:
         blocks = inflight.pop(future)[0]
         client.cancel(future)
-        again, lost = deaths.requeue(blocks, died.get(future.key, 0))
+        again, lost = deaths.requeue(blocks, None if died is None else died.get(future.key, 0))
         queue.extend(again)
         given_up += lost
     return given_up

@@ -129,12 +129,12 @@ class Submission:
     def runs_here(self, todo: list[int]) -> bool:
         """On threads of this process: a sweep on this machine's GPU, the analysis paths
         unless a scheduler is named, and a simulated sweep priced below a local cluster's
-        start (not when the cluster is open already, serve's, nor with a dashboard); never
-        a brought model on the CPU (a crash in it costs a worker: sweeps.workers.deaths)."""
+        start (not when the cluster is open already, serve's, nor with a dashboard); not a
+        brought model on our local cluster's CPUs (a crash costs a worker: workers.deaths)."""
         c = self.compute
         if self.plan.numerics.settings.device == "cuda":   # else a cluster's GPU workers
             return c.kind == LOCAL
-        return not self.plan.scene.digests and (
+        return not (self.plan.scene.digests and c.kind == LOCAL) and (
             (self.plan.path != "simulate" and c.kind != SCHEDULER) or
             (c.kind == LOCAL and not c.dashboard and not c.is_open and
              small(self.plan, todo, c.threads)))

@@ -31,23 +31,22 @@ def allowed_failures() -> int:
     return int(dask.config.get("distributed.scheduler.allowed-failures", 3))
 
 
-def _suspicious(keys, dask_scheduler=None) -> dict:
-    """On the scheduler: the workers that died while each task of ``keys`` ran on them."""
-    tasks = dask_scheduler.tasks
-    return {k: tasks[k].suspicious for k in keys if k in tasks}
-
-
-def died_running(client, futures) -> dict:
-    """Task key -> the worker processes that died while running it (the scheduler's
-    ``suspicious`` count; absent when unknown). Asked before an orphaned task is cancelled,
-    while the scheduler still knows it."""
+def died_running(client, futures) -> dict | None:
+    """Task key -> the worker processes that died while it was on them (the scheduler's
+    ``suspicious`` count), asked before an orphaned task is cancelled, while the scheduler
+    still knows it; None when the scheduler cannot say."""
     if not futures:
         return {}
+
+    def suspicious(keys, dask_scheduler=None) -> dict:   # (nested: pickled by value, so
+        tasks = dask_scheduler.tasks                    # a scheduler without ditherlab
+        return {k: tasks[k].suspicious for k in keys if k in tasks}   # runs it too)
+
     try:
-        return client.run_on_scheduler(_suspicious, keys=[f.key for f in futures])
-    except Exception as exc:  # noqa: BLE001 -- a scheduler without it: count no deaths
+        return client.run_on_scheduler(suspicious, keys=[f.key for f in futures])
+    except Exception as exc:  # noqa: BLE001 -- e.g. distributed.scheduler.pickle: False
         log.debug("could not ask the scheduler for worker deaths (%s)", exc)
-        return {}
+        return None
 
 
 def killed_worker(future) -> bool:
@@ -71,19 +70,26 @@ def crash_line(deaths: int) -> str:
 
 class Deaths:
     """The worker deaths each block of a run caused, and what to do with a task after some:
-    run its blocks one a task, or give a block up."""
+    run its blocks one a task, or give a block up. Only for a run of a brought model
+    (``counting``): the engine's own kernels do not crash their process, and a worker that
+    left for another reason (a batch job's walltime, a preemption: dask counts those too)
+    must not fail a block; without ``counting`` an orphan is always queued again, as before."""
 
-    def __init__(self):
+    def __init__(self, counting: bool = True):
+        self.counting = counting
         self.allowed = allowed_failures()
         self.of_block: dict[int, int] = {}
         self.alone: set[int] = set()         # blocks to run one a task from now on
 
-    def requeue(self, blocks: list[int], died: int) -> tuple[list[int], list[int]]:
-        """A task of ``blocks`` did not finish and ``died`` workers died running it
-        (``allowed + 1``: dask gave it up). Returns (blocks to queue again, blocks to give
-        up). Several blocks: each alone from now on, its count untouched (the culprit is
-        not known). One block: its deaths add up; past ``allowed`` it is given up."""
-        if died <= 0:
+    def requeue(self, blocks: list[int], died: int | None) -> tuple[list[int], list[int]]:
+        """A task of ``blocks`` did not finish and ``died`` workers died while it was on
+        them (``allowed + 1``: dask gave it up; None: unknown, counted 1 for a block that
+        ran alone). Returns (blocks to queue again, blocks to give up). Several blocks: each
+        alone from now on, its count untouched (the culprit is not known). One block: its
+        deaths add up; past ``allowed`` it is given up."""
+        if died is None:
+            died = 1 if len(blocks) == 1 and blocks[0] in self.alone else 0
+        if died <= 0 or not self.counting:
             return blocks, []
         if len(blocks) > 1:
             self.alone.update(blocks)

@@ -138,9 +138,13 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     q = p.copy()
     q[P.T_END] = min(q[P.T_END], 1e-3)
     q[P.T_TRANSIENT] = 0.0
+    # a brought model's kernel is compiled on no point at all: its code may crash the
+    # process at a point the spec-load check did not try (sweeps.workers.deaths)
+    point = np.empty((0, 4)) if scene.digests and settings.device != "cuda" else \
+        np.array([[0.1, 1000.0, 0.1, 0.1]])
     with compile_lock(scene):
         try:
-            run_block(scene, np.array([[0.1, 1000.0, 0.1, 0.1]]), q, settings)
+            run_block(scene, point, q, settings)
         except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it
             log.debug("warm-up failed: %s", exc)
     _COMPILED.add(scene)

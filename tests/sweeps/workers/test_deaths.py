@@ -20,12 +20,28 @@ def test_a_task_of_several_blocks_that_killed_a_worker_is_split_and_nobody_is_bl
 def test_a_block_is_given_up_once_its_tasks_killed_more_workers_than_dask_allows():
     d = D.Deaths()
     assert d.allowed == 3   # distributed.scheduler.allowed-failures, dask's default
-    assert d.requeue([7], died=0) == ([7], [])   # left its workers (batch jobs ended): no death
+    assert d.requeue([7], died=0) == ([7], [])   # its workers were retired: no death
     assert d.requeue([7], died=2) == ([7], [])   # both workers of a local cluster died
     assert d.requeue([7], died=1) == ([7], [])   # 3: still allowed
     assert d.requeue([7], died=1) == ([], [7])   # 4 > 3: given up
     assert 7 in d.alone and d.of_block[7] == 4
     assert D.crash_line(4).startswith("4 worker processes died computing it")
+
+
+def test_an_unknown_count_charges_one_death_to_a_block_that_ran_alone():
+    d = D.Deaths()
+    assert d.requeue([1, 2], died=None) == ([1, 2], []) and d.alone == set()  # not alone
+    d.alone.add(1)
+    assert d.requeue([1], died=None) == ([1], []) and d.of_block == {1: 1}
+
+
+def test_the_engines_own_models_are_never_given_up():
+    """Only a brought model's run counts deaths: a worker that left for another reason (a
+    batch job's walltime, a preemption) is an unexpected removal to dask too."""
+    d = D.Deaths(counting=False)
+    for _ in range(10):
+        assert d.requeue([7], died=4) == ([7], [])
+    assert d.of_block == {} and d.alone == set()
 
 
 class _NoWorkers:
