@@ -67,7 +67,8 @@ def dask_client(scheduler: str | None = None, workers: int = 2, dashboard: str |
             log.info("dask dashboard: %s", client.dashboard_link)
         client.register_plugin(_ignore_sigint_plugin())   # ... and workers restarted later
         client = matched(client)
-        client.check.back_within_s = LOCAL_WORKERS_BACK_S   # our nannies restart the dead
+        client.check.back_within_s = LOCAL_WORKERS_BACK_S   # our nannies restart the dead,
+        client.check.revive = lambda: cluster.scale(workers)   # or we start new ones
         yield client
 
 

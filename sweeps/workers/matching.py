@@ -37,6 +37,11 @@ SHOWN = 3            # foreign workers named in one line (the rest counted)
 # a folder named like one of our packages appeared on its path) leaves the run without
 # workers: past this, the run ends in one line instead of waiting for ever.
 LOCAL_WORKERS_BACK_S = 60.0
+# dask's LocalCluster drops a nanny from its workers now and then when its worker keeps
+# crashing (reproduced with plain dask: after 18-24 tasks that segfault their worker, no
+# worker and no nanny left, its spec still listing both); scaling it to its size again
+# brings them back. Done once our local cluster has had no worker for this long.
+REVIVE_S = 10.0
 
 
 class ForeignWorkersError(UserError):
@@ -72,6 +77,8 @@ class WorkerCheck:
         self.gpus: dict[str, float] = {}        # address -> its GPU resource, once asked
         self.back_within_s: float | None = None  # our local cluster: LOCAL_WORKERS_BACK_S
         self.none_since: float | None = None     # when the last worker left (none since)
+        self.revive = None                       # our local cluster: start its workers again
+        self.revived = False                     # (once per time without workers)
 
     def expect(self, models, gpu: bool = False) -> None:
         """The models this run brings by import path (engine.registry): a worker must also
@@ -110,10 +117,14 @@ class WorkerCheck:
         """WorkersGoneError when our local cluster has had no worker for longer than
         ``back_within_s`` (a batch or external cluster may wait for its workers at will)."""
         if any_worker or self.back_within_s is None:
-            self.none_since = None
+            self.none_since, self.revived = None, False
             return
         now = time.monotonic()
         self.none_since = self.none_since or now
+        if now - self.none_since > REVIVE_S and self.revive is not None and not self.revived:
+            log.debug("no local worker for %.0f s: starting them again", REVIVE_S)
+            self.revived = True
+            self.revive()
         if now - self.none_since > self.back_within_s:
             raise WorkersGoneError(
                 f"every local dask worker died and none has started again for "

@@ -60,6 +60,24 @@ def test_a_local_cluster_without_workers_ends_the_run_after_its_bound(monkeypatc
         check.matching()            # t = 161: 61 s
 
 
+def test_a_local_cluster_without_workers_is_scaled_again_once_before_it_gives_up(monkeypatch):
+    """dask's LocalCluster drops a nanny now and then when its worker keeps crashing (with
+    plain dask: no worker and no nanny left after 18-24 segfaulting tasks); after REVIVE_S
+    without a worker the cluster is asked for its workers again, once per such gap."""
+    clock = iter([0.0, 5.0, 11.0, 30.0, 31.0, 50.0])
+    monkeypatch.setattr(matching.time, "monotonic", lambda: next(clock))
+    asked = []
+    check = matching.WorkerCheck(_NoWorkers())
+    check.back_within_s, check.revive = 60.0, lambda: asked.append(1)
+    for _ in range(4):
+        check.matching()            # t = 0, 5: waiting; 11: revived; 30: not again
+    assert asked == [1]
+    check._check_gone(True)         # a worker came back: the next gap may revive again
+    check.matching()                # t = 31: none since now
+    check.matching()                # t = 50: 19 s, over REVIVE_S
+    assert asked == [1, 1]
+
+
 def test_other_clusters_wait_for_their_workers_at_will(monkeypatch):
     monkeypatch.setattr(matching.time, "monotonic", lambda: pytest.fail("no clock needed"))
     check = matching.WorkerCheck(_NoWorkers())   # a batch or external cluster: no bound
