@@ -15,7 +15,7 @@ from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
-from ..workers.deaths import allowed_failures, crash_line, died_running
+from ..workers.deaths import Deaths, crash_line, died_running
 from ..workers.matching import WorkersGoneError
 from ..planning.plan import Plan, work_s
 
@@ -70,7 +70,7 @@ class SampleRuns:
         self.futures: dict[int, object] = {}   # re-run -> its task (shared by a group)
         self.groups: list[tuple[object, list[int]]] = []   # (task, its re-runs), in order
         self.allowed: dict[object, frozenset] = {}   # task -> the workers it may run on
-        self.deaths: dict[int, int] = {}   # group -> workers that died running it
+        self.deaths = Deaths(counting=bool(plan.scene.digests))   # per group of re-runs
         self.given_up = ""                   # why a re-run was given up (gather raises it)
 
     def pending(self) -> list:
@@ -145,14 +145,12 @@ class SampleRuns:
             return
         orphans = [(g, f) for g, (f, _) in enumerate(self.groups)
                    if f in self.allowed and not f.done() and not self.allowed[f] & good.keys()]
-        counting = bool(self.plan.scene.digests)
-        died = died_running(client, [f for _, f in orphans]) if counting else {}
+        died = died_running(client, [f for _, f in orphans]) if self.deaths.counting else {}
         for g, future in orphans:
-            self.deaths[g] = self.deaths.get(g, 0) + (1 if died is None else
-                                                      died.get(future.key, 0))
             client.cancel(future)
-            if counting and self.deaths[g] > allowed_failures():
-                self.given_up = f"a re-run was given up: {crash_line(self.deaths[g])}"
+            _, lost = self.deaths.requeue([g], None if died is None else died.get(future.key, 0))
+            if lost:   # (the same rule as a block's: sweeps.workers.deaths.Deaths)
+                self.given_up = f"a re-run was given up: {crash_line(self.deaths.of_block[g])}"
                 continue
             group = self.groups[g][1]
             self.groups[g] = (self._submit(client, group, list(good)), group)

@@ -13,7 +13,6 @@ import time
 import numpy as np
 
 from engine import status as S
-
 from store.record import BlockRecord
 
 from ..workers import task

@@ -83,13 +83,17 @@ class Deaths:
 
     def requeue(self, blocks: list[int], died: int | None) -> tuple[list[int], list[int]]:
         """A task of ``blocks`` did not finish and ``died`` workers died while it was on
-        them (``allowed + 1``: dask gave it up; None: unknown, counted 1 for a block that
-        ran alone). Returns (blocks to queue again, blocks to give up). Several blocks: each
-        alone from now on, its count untouched (the culprit is not known). One block: its
-        deaths add up; past ``allowed`` it is given up."""
+        them (``allowed + 1``: dask gave it up; None: the scheduler cannot say, so the
+        blocks go alone from now on and a block orphaned again alone counts 1). Returns
+        (blocks to queue again, blocks to give up). Several blocks: each alone from now on,
+        its count untouched (the culprit is not known). One block: its deaths add up; past
+        ``allowed`` it is given up."""
+        if not self.counting:
+            return blocks, []
         if died is None:
             died = 1 if len(blocks) == 1 and blocks[0] in self.alone else 0
-        if died <= 0 or not self.counting:
+            self.alone.update(blocks)   # (else an unknown count never grows: the old hang)
+        if died <= 0:
             return blocks, []
         if len(blocks) > 1:
             self.alone.update(blocks)
