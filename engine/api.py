@@ -13,6 +13,7 @@ import numpy as np
 
 from . import params as P
 from .integrators.problem import CTR_EVALS, CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS
+from .jit import compile_once
 from .kernels import make_config, point_kernel
 from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
@@ -96,7 +97,9 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
     out = np.empty(pk.n_out)
     ctr = np.zeros(CTR_SIZE, dtype=np.int64)
     rec = np.empty((max_records if record else 0, pk.n + 1))
-    status = pk.run_point(p, cfg, pk.alloc(), y, obs, out, ctr, rec)
+    args = (p, cfg, pk.alloc(), y, obs, out, ctr, rec)
+    compile_once(pk.run_point, args, scene)   # (once per machine: the others load it)
+    status = pk.run_point(*args)
     k = int(ctr[CTR_NREC])
     return Simulation(
         outputs={nm: float(out[j]) for j, nm in enumerate(pk.names)}, status=int(status),

@@ -13,6 +13,7 @@ import numpy as np
 
 from . import params as P
 from . import status as S
+from .jit import compile_once
 from .kernels import block_kernel, make_config, point_kernel
 from .observables import N_HIST
 from .scene import ANALYSIS_PATHS, Scene
@@ -77,8 +78,10 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
         status = np.full(m, S.NOT_COMPUTED, dtype=np.int8)
         counters = np.zeros((m, 3), dtype=np.int64)
         kernel = block_kernel(scene)
+        args = (points, p, make_config(settings), out, status, counters)
+        compile_once(kernel, args, scene)   # (once per machine: the others load it)
         t0 = time.perf_counter()
-        kernel(points, p, make_config(settings), out, status, counters)
+        kernel(*args)
         wall = time.perf_counter() - t0
     evals = counters[:, 2]
     share = evals / evals.sum() if evals.sum() > 0 else np.full(m, 1.0 / max(m, 1))

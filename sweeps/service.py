@@ -40,6 +40,7 @@ import store
 from store.catalogue import Catalogue
 from store.lease import HEARTBEAT_S, owner_tag, queued_device
 
+from .run.outcome import unusable
 from .run.progress import ATTACH_POLL_S, clock_text, progress_text
 
 log = logging.getLogger("ditherlab")
@@ -54,7 +55,8 @@ SERVED = {"cpu": ("cpu",), "cuda": ("cpu", "cuda")}
 def enqueue(plan, store_root) -> dict:
     """Record ``plan`` as a queued sweep (spec saved in its folder); returns the row.
 
-    A sweep that is done or running (live) is left as it is: the row says so.
+    A sweep that is done or running (live) is left as it is: the row says so; a done one
+    whose cube is unusable (sweeps.run.outcome.unusable) is queued again.
     """
     store.layout.check_store(store_root, write=True)   # read-only, a file: one line, now
     sweep = store.SweepDir(store_root, plan.sweep_id)
@@ -65,9 +67,9 @@ def enqueue(plan, store_root) -> dict:
     catalogue.register(plan.sweep_id, plan.spec.name, spec_json, plan.n_points,
                        len(plan.blocks), sweep.root)
     row = catalogue.enqueue(plan.sweep_id)
-    if row["state"] == "done" and not sweep.cube.exists():   # a lost cube: rebuild it
-        catalogue.finish(plan.sweep_id, "cancelled", message="cube missing; re-queued")
-        row = catalogue.enqueue(plan.sweep_id)
+    if row["state"] == "done" and (why := unusable(plan, sweep)):   # rebuild it
+        catalogue.finish(plan.sweep_id, "cancelled", message=f"{why}; re-queued")
+        row = {**catalogue.enqueue(plan.sweep_id), "message": f"{why}; re-queued"}
     return row
 
 

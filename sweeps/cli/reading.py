@@ -78,7 +78,8 @@ def cmd_status(args) -> int:
     for r, state, live in zip(rows, states, lives):
         blocks = f"{r['done_blocks']}/{r['n_blocks']}" if r["n_blocks"] else "-"
         print(f"{r['sweep_id']:<13}{r['name'][:23]:<24}{state:<{w}}{r['n_points']:>8}"
-              f"{r['done_points']:>8}{r['failed_points']:>8}{blocks:>10}  {_note(r, live)}")
+              f"{r['done_points']:>8}{r['failed_points']:>8}{blocks:>10}  "
+              f"{_note(r, live, root)}")
     hint = queue_hint(cat, rows)
     if hint:
         print(hint)
@@ -110,8 +111,12 @@ def _header(cube: Path):
         raise
 
 
-def _note(row: dict, live: str, width: int = 90) -> str:
-    """The last column of ``status``: progress and ETA, the error, or when it changed."""
+def _note(row: dict, live: str, root: Path, width: int = 90) -> str:
+    """The last column of ``status``: progress and ETA, the error, or when it changed; for a
+    finished sweep whose cube records accuracy warnings, how many and where to read them."""
+    from store import SweepDir
+
+    from ..overview import cube_warnings
     from ..service import progress_text
 
     if live == "running":
@@ -124,6 +129,11 @@ def _note(row: dict, live: str, width: int = 90) -> str:
         text = f"finished {row['updated'][:19]}"
     else:
         text = row["message"] or f"{live} {row['updated'][:19]}"
+    if live in ("done", "partial"):
+        n = len(cube_warnings(SweepDir(root, row["sweep_id"]).cube))
+        if n:
+            text = (f"{n} accuracy warning{'s' * (n > 1)} (`ditherlab status "
+                    f"{row['sweep_id']}`); {text}")
     return text if len(text) <= width else text[:width - 3] + "..."
 
 

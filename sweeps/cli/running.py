@@ -82,7 +82,7 @@ def _submit_detached(plan, root: Path) -> int:
     cat = store.Catalogue(root)
     state = cat.live_state(row)
     if state == "queued":
-        print(f"{row['sweep_id']}: queued")
+        print(f"{row['sweep_id']}: queued" + (f" ({row['message']})" if row["message"] else ""))
         if unserved(cat.servers(), [row]):
             wanted = "`ditherlab serve --device cuda`" if plan.spec.device == "cuda" \
                 else "`ditherlab serve`"

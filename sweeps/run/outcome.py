@@ -11,6 +11,7 @@ from pathlib import Path
 
 import store
 
+from ..estimates.error_reruns import needs_estimate
 from .lease_holder import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
 
@@ -38,15 +39,20 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
     """The run's final state, recorded in the catalogue (giving the lease back):
 
     every point final -> ``done``, or ``partial`` when some failed or went non-finite;
-    points left -> ``cancelled`` (cancel, ``max_blocks``) or ``queued`` (serve stopping).
-    Without a lease (nothing was left to compute) the row is settled unless a live
-    process holds it.
+    points left -> ``cancelled`` (cancel, ``max_blocks``) or ``queued`` (serve stopping),
+    and so too every point final but a cancel or a stopping serve before the error
+    estimate (else the cube stayed ``done`` unchecked: serve did not queue it again, and
+    ``status`` had no estimate to show). Without a lease (nothing was left to compute) the
+    row is settled unless a live process holds it.
     """
     counts = point_counts(cube)
     n = cube["status"].size
     n_done_blocks = len(done_blocks(plan, cube))
     progress = f"{n_done_blocks}/{len(plan.blocks)} blocks"
-    if counts["done_points"] == n:
+    unchecked = stopped in (SHUTDOWN, CANCELLED) and needs_estimate(plan, sweep, cube)
+    if unchecked:
+        progress += ", before the error estimate"
+    if counts["done_points"] == n and not unchecked:
         state = "partial" if counts["failed_points"] else "done"
         message = (f"{counts['failed_points']} of {n} points failed or went non-finite "
                    "(submit again to retry them)" if counts["failed_points"] else "")
@@ -125,3 +131,17 @@ def abort(plan, sink, lease, exc: BaseException, *, serving: bool) -> None:
         if not isinstance(exc, store.errors.NoSpaceError):   # SQLite is out of space too
             log.warning("could not record the stop of sweep %s: %s", plan.sweep_id, err)
         lease.close()
+
+
+def unusable(plan, sweep) -> str | None:
+    """Why a done sweep's cube cannot be served as it is, in a few words, or None: missing,
+    unreadable (a truncated or foreign file), or every point final but its error estimate
+    never computed (a stop between the last block and the estimate). Before, only a missing
+    cube was queued again: ``submit --detach`` said "done, already complete" over the others."""
+    try:
+        cube = store.read_cube(sweep.cube)
+    except FileNotFoundError:
+        return "cube missing"
+    except (OSError, ValueError) as err:   # (store.cube_io.CubeError is a ValueError)
+        return f"cube unreadable ({str(err).splitlines()[0][:120]})"
+    return "error estimate missing" if needs_estimate(plan, sweep, cube) else None

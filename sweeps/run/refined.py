@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+from contextlib import nullcontext
 
 import numpy as np
 
@@ -20,6 +21,7 @@ import store
 from store.flags import COMPUTED, INFERRED
 from engine import status as S
 
+from ..workers.threads import ThreadClient
 from .dispatch import run_blocks
 from ..planning.plan import Plan, balanced_blocks
 from ..planning.refine import CLASS_OUTPUT, MARGIN_OUTPUT, Refinement
@@ -89,10 +91,12 @@ def run(plan: Plan, todo: list[int], sink, compute, *, blocks, progress,
     or sweeps.run.local.run_blocks_local on threads), infer the rest, and (simulate)
     estimate the error on computed points: its finer re-runs run where a worker would idle
     at a level's tail (sweeps.run.dispatch ``filler``)."""
-    simulate = plan.path == "simulate"
-    pool = compute.client if blocks is run_blocks else None   # (threads: the estimate's own)
-    # the error sample's finer re-runs fill the workers idling at each level's tail
-    early = SampleRuns(plan) if simulate and todo and not \
+    simulate, on_cluster = plan.path == "simulate", blocks is run_blocks
+    pool = compute.client if on_cluster else None   # (threads: the estimate's own, below)
+    # the error sample's finer re-runs fill a cluster's workers idling at each level's tail
+    # (on threads, each level's pool closes with it: they run after the last level; passed
+    # there, a GPU sweep, or a CPU one small enough for threads, ended in a TypeError)
+    early = SampleRuns(plan) if simulate and on_cluster and todo and not \
         (sink.sweep.root / ESTIMATE_FILE).exists() else None
     extra = {"filler": early} if early is not None else {}
     extra = extra if warm_up else {**extra, "warm_up": False}
@@ -107,7 +111,9 @@ def run(plan: Plan, todo: list[int], sink, compute, *, blocks, progress,
         todo, level = _advance(plan, sink.cube), level + 1
     sink.timings["compute_s"] = time.perf_counter() - t
     if simulate and needs_estimate(plan, sink.sweep, sink.cube):
-        estimate_into(plan, pool, sink.cube, sink.sweep, sink.timings, started=early,
-                      display=progress.display(plan))
+        with ThreadClient(compute.threads, name="ditherlab-rerun") if pool is None else \
+                nullcontext(pool) as reruns_on:
+            estimate_into(plan, reruns_on, sink.cube, sink.sweep, sink.timings, started=early,
+                          display=progress.display(plan))
     elif early is not None:
         early.cancel(pool)

@@ -19,12 +19,12 @@ import importlib.util
 import logging
 import os
 import time
-from contextlib import contextmanager
 
 import numpy as np
 
 from engine import params as P
 from engine import status as S
+from engine.jit import compile_lock
 from store.record import BlockRecord
 
 log = logging.getLogger("ditherlab")
@@ -130,7 +130,7 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     """Compile the block kernel of ``scene`` in this process; returns seconds. Once per
     machine: the first process to need a scene compiles it into the kernel cache
     (engine.jit) holding that scene's lock file there, and the others, waiting for the
-    lock, load it from the cache instead of compiling it again (:func:`compile_lock`).
+    lock, load it from the cache instead of compiling it again (engine.jit.compile_lock).
     Calls the engine directly, not compute_block: no ``$DITHERLAB_BLOCK_LOG`` line."""
     from engine.blocks import run_block
 
@@ -152,30 +152,3 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
 
 
 _COMPILED: set = set()   # scenes whose kernel this process has (compiled or loaded)
-
-
-@contextmanager
-def compile_lock(scene):
-    """Held while this process compiles or loads ``scene``'s kernel: an exclusive
-    ``flock`` on ``<kernel cache>/compiling/<scene hash>.lock``, so that the workers of
-    one machine compile a scene once, not once each (the others wait, then find it in
-    the cache). Released by the kernel when a holder dies; without a writable cache
-    folder, no lock (each process compiles, as before)."""
-    import fcntl
-    import hashlib
-
-    from engine.jit import cache_dir
-
-    name = hashlib.sha1(repr(scene).encode()).hexdigest()[:16]
-    try:
-        folder = cache_dir() / "compiling"
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / f"{name}.lock", os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        yield
-    finally:
-        os.close(fd)   # releases the lock

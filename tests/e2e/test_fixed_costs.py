@@ -78,22 +78,27 @@ COMPILE = """
 import json, sys
 import numpy as np
 from numba.core import event
+from engine.blocks import run_block
 from sweeps.planning.plan import make_plan
 from sweeps.spec import parse_spec
 from sweeps.workers.task import warm_up
 plan = make_plan(parse_spec(json.loads(sys.argv[1])))
 print("ready", flush=True)
 with event.install_recorder("numba:compile") as rec:
-    warm_up(plan.scene, plan.params, plan.numerics.settings)
+    if sys.argv[2] == "sweep":      # a dask worker's warm-up
+        warm_up(plan.scene, plan.params, plan.numerics.settings)
+    else:                           # the engine called directly (a script, a test)
+        run_block(plan.scene, plan.block_points(0)[:1], plan.params, plan.numerics.settings)
 print(json.dumps({"compiled": len(rec.buffer)}), flush=True)
 """
 
 
 @pytest.mark.long
 def test_two_processes_compile_a_scene_once(tmp_path):
-    """Two processes warm up one scene with an empty kernel cache, both started before
-    either could compile (the test holds the scene's lock until both are ready): one
-    compiles, the other loads the kernel from the cache."""
+    """Two processes need one scene's kernel with an empty kernel cache, a sweep's warm-up
+    and a direct engine.blocks.run_block, both started before either could compile (the
+    test holds the scene's lock until both are ready): one compiles, the other loads the
+    kernel from the cache (engine.jit.compile_lock)."""
     env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "cache")}
     script = tmp_path / "compile.py"
     script.write_text(COMPILE)
@@ -101,7 +106,7 @@ def test_two_processes_compile_a_scene_once(tmp_path):
         import json, sys
         from sweeps.planning.plan import make_plan
         from sweeps.spec import parse_spec
-        from sweeps.workers.task import compile_lock
+        from engine.jit import compile_lock
         plan = make_plan(parse_spec(json.loads(sys.argv[1])))
         with compile_lock(plan.scene):
             print("held", flush=True)
@@ -109,9 +114,9 @@ def test_two_processes_compile_a_scene_once(tmp_path):
         """), json.dumps(SPEC)], env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE,
         text=True)
     assert holder.stdout.readline().strip() == "held"
-    procs = [subprocess.Popen([sys.executable, str(script), json.dumps(SPEC)], env=env,
+    procs = [subprocess.Popen([sys.executable, str(script), json.dumps(SPEC), mode], env=env,
                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-             for _ in range(2)]
+             for mode in ("sweep", "engine")]
     try:
         for p in procs:
             assert p.stdout.readline().strip() == "ready", p.stderr.read()

@@ -170,3 +170,45 @@ def test_serve_leaves_the_gpus_sweeps_to_serve_device_cuda(spec, tmp_path):
     with xr.open_dataset(cube) as ds:
         assert json.loads(ds.attrs["engine_settings"])["device"] == "cuda"
         assert (ds["status"] == 0).all()
+
+
+REFINED = """
+import json, sys, warnings
+import sweeps
+import sweeps.run.local as local
+local.GPU_LAUNCHES = 1   # the simulator runs one kernel at a time in a process
+spec = {"name": "refined-gpu", "friction": "elastoplastic", "dither": "sine-velocity",
+        "outputs": ["long_stick_fraction"], "accuracy": "draft", "refine": True,
+        "device": "cuda", "params": {"lam": 0.8, "slow_force": {"amplitude": 1.7, "omega": 0.3}},
+        "time": {"t_end": 0.5, "t_transient": 0.1},
+        "grid": {"W": {"start": 0.0, "stop": 3.0, "num": 3},
+                 "omega": {"start": 10.0, "stop": 1000.0, "num": 3, "scale": "log"},
+                 "v_ref": [0.1]}}
+if __name__ == "__main__":
+    res = sweeps.run_sweep(spec, sys.argv[1], workers=1, progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sweeps.InferredPointsWarning)
+        ds = sweeps.open_sweep(res.sweep_id, sys.argv[1])
+    print(json.dumps({"state": res.state, "timings": res.timings,
+                      "estimate": json.loads(ds.attrs.get("error_estimate", "null"))}))
+"""
+
+
+def test_a_refined_gpu_sweep_runs_its_levels_and_its_estimate(tmp_path):
+    """A refined sweep on the GPU runs on threads here, level by level, then its error
+    estimate's re-runs on CPU threads of their own: the levels' dispatch was handed the
+    re-runs as ``filler``, which the threads' dispatch does not take (a TypeError: the sweep
+    failed before its first block)."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "refined.py"
+    script.write_text(REFINED)
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "store")],
+                          env=_no_sim() | {"NUMBA_ENABLE_CUDASIM": "1"}, capture_output=True,
+                          text=True, timeout=900)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert out["state"] == "done" and "cluster_s" not in out["timings"], out
+    assert out["estimate"]["compared_with"] == "standard", out
+    assert out["estimate"]["sample_points"] > 0 and out["estimate"]["warnings"] == [], out

@@ -39,3 +39,23 @@ def test_simulated_sweeps_share_one_cluster_and_analysis_starts_none(monkeypatch
     assert ctx.client is None              # closed and forgotten on leaving
     ctx.sweep("fig14")                     # outside: each sweep starts its own again
     assert used[-1][1] is None and len(started) == 1
+
+
+def test_fig14_reads_inferred_points_quietly_but_passes_on_every_other_warning():
+    """Fig. 14's refined cubes are read for their classes only: their InferredPointsWarning
+    is silenced, but an accuracy warning of the same read still reaches the user (a blanket
+    ``simplefilter("ignore")`` hid it: the gallery said "holds" over a broken promise)."""
+    import warnings
+
+    from sweeps.errors import InferredPointsWarning
+    from sweeps.gallery.fig_zone import classes_of
+
+    def read():
+        warnings.warn("4 inferred points", InferredPointsWarning, stacklevel=2)
+        warnings.warn("F_mean moved 3e-3, over standard's promise", UserWarning, stacklevel=2)
+        return "cube"
+
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert classes_of(read) == "cube"
+    assert [str(w.message) for w in seen] == ["F_mean moved 3e-3, over standard's promise"]

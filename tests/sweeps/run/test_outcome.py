@@ -1,0 +1,119 @@
+"""How a run ends (sweeps.run.outcome.final_result): a cancel or a stopping serve that lands
+after the last block but before the error estimate leaves the sweep resumable, not ``done``
+and unchecked; and a done sweep whose cube cannot be served is queued again by ``submit
+--detach`` (sweeps.service.enqueue)."""
+from __future__ import annotations
+
+import time
+
+import pytest
+
+import store
+from sweeps.api import run_sweep
+from sweeps.estimates.error_reruns import ESTIMATE_FILE, needs_estimate
+from sweeps.planning.plan import make_plan
+from sweeps.run.lease_holder import CANCELLED, SHUTDOWN
+from sweeps.run.outcome import final_result
+from sweeps.spec import parse_spec
+
+# 4 draft LuGre points, short: run on threads of this process in a few seconds
+SPEC = {"name": "outcome", "friction": "lugre", "dither": "none", "method": "simulate",
+        "outputs": ["v_mean"], "accuracy": "draft",
+        "time": {"t_end": 4.0, "t_transient": 1.0},
+        "grid": {"v_ref": [0.2, 0.4], "v_d": [0.05, 0.1]}}
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A finished sweep whose saved estimate is then removed: every point final, the
+    estimate never computed (a stop between the last block and the estimate)."""
+    root = tmp_path_factory.mktemp("store")
+    res = run_sweep(SPEC, root, progress=False)
+    assert res.state == "done"
+    plan = make_plan(parse_spec(SPEC))
+    sweep = store.SweepDir(root, plan.sweep_id)
+    (sweep.root / ESTIMATE_FILE).unlink()
+    cube = store.read_cube(sweep.cube)
+    assert needs_estimate(plan, sweep, cube)
+    return plan, sweep, store.Catalogue(root), cube
+
+
+@pytest.mark.parametrize("stopped, state", [(CANCELLED, "cancelled"), (SHUTDOWN, "queued")])
+def test_a_stop_before_the_estimate_leaves_the_sweep_to_resume(finished, stopped, state):
+    plan, sweep, catalogue, cube = finished
+
+    class Lease:   # what final_result needs of a lease: who holds it, its end
+        owner = "serve-test"
+        ended = None
+
+        def end(self, state, **fields):
+            self.ended = (state, fields["message"])
+
+    lease = Lease()
+    res = final_result(plan, sweep, catalogue, cube, blocks_run=0, t0=time.perf_counter(),
+                       timings={}, lease=lease, stopped=stopped)
+    assert res.state == state and lease.ended[0] == state
+    assert "before the error estimate" in res.message, res.message
+
+
+def test_without_a_stop_the_finished_sweep_is_done(finished):
+    plan, sweep, catalogue, cube = finished
+    res = final_result(plan, sweep, catalogue, cube, blocks_run=0, t0=time.perf_counter(),
+                       timings={})
+    assert res.state == "done" and res.message == ""
+
+
+@pytest.fixture
+def done_sweep(tmp_path):
+    """A finished sweep in a fresh store: its plan and folder."""
+    res = run_sweep(SPEC, tmp_path, progress=False)
+    assert res.state == "done"
+    plan = make_plan(parse_spec(SPEC))
+    return plan, store.SweepDir(tmp_path, plan.sweep_id), tmp_path
+
+
+@pytest.mark.parametrize("damage, why", [
+    ("truncate", "cube unreadable"),
+    ("delete", "cube missing"),
+    ("estimate", "error estimate missing"),
+    (None, None),
+])
+def test_submit_detach_queues_a_done_sweep_again_when_its_cube_is_unusable(done_sweep, damage,
+                                                                         why):
+    """``submit --detach`` of a done sweep (sweeps.service.enqueue): a truncated cube was
+    answered "done, already complete" (exit 0) and never rebuilt."""
+    from sweeps.service import enqueue
+
+    plan, sweep, root = done_sweep
+    if damage == "truncate":
+        sweep.cube.write_bytes(sweep.cube.read_bytes()[:1000])
+    elif damage == "delete":
+        sweep.cube.unlink()
+    elif damage == "estimate":
+        (sweep.root / ESTIMATE_FILE).unlink()
+    row = enqueue(plan, root)
+    if why is None:
+        assert row["state"] == "done"
+    else:
+        assert row["state"] == "queued", row
+        assert row["message"].startswith(why) and row["message"].endswith("re-queued"), row
+
+
+def test_the_status_table_names_a_finished_sweeps_accuracy_warnings(done_sweep):
+    """``ditherlab status`` (the table): a done sweep whose cube records an accuracy warning
+    says how many and where to read them; before, the table said only "finished"."""
+    import json
+
+    from tests.helpers import in_process
+
+    plan, sweep, root = done_sweep
+    status, out, _ = in_process("status", "--store", root)
+    assert status == 0 and "accuracy warning" not in out
+    cube = store.read_cube(sweep.cube)
+    est = json.loads(cube.attrs["error_estimate"])
+    est["warnings"] = ["v_mean moved 3e-2 at 1 of 4 re-run points, over draft's promise"]
+    cube.attrs["error_estimate"] = json.dumps(est)
+    store.publish(cube, sweep.cube)
+    status, out, _ = in_process("status", "--store", root)
+    row = next(line for line in out.splitlines() if line.startswith(plan.sweep_id))
+    assert status == 0 and f"1 accuracy warning (`ditherlab status {plan.sweep_id}`)" in row
