@@ -143,5 +143,6 @@ def unusable(plan, sweep) -> str | None:
     except FileNotFoundError:
         return "cube missing"
     except (OSError, ValueError) as err:   # (store.cube_io.CubeError is a ValueError)
-        return f"cube unreadable ({str(err).splitlines()[0][:120]})"
+        cause = str(err.__cause__ or err).splitlines()[0]
+        return f"cube unreadable: {cause if len(cause) <= 90 else cause[:87] + '...'}"
     return "error estimate missing" if needs_estimate(plan, sweep, cube) else None
