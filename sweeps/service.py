@@ -40,7 +40,6 @@ import store
 from store.catalogue import Catalogue
 from store.lease import HEARTBEAT_S, owner_tag, queued_device
 
-from .run.outcome import unusable
 from .run.progress import ATTACH_POLL_S, clock_text, progress_text
 
 log = logging.getLogger("ditherlab")
@@ -67,6 +66,7 @@ def enqueue(plan, store_root) -> dict:
     catalogue.register(plan.sweep_id, plan.spec.name, spec_json, plan.n_points,
                        len(plan.blocks), sweep.root)
     row = catalogue.enqueue(plan.sweep_id)
+    from .run.outcome import unusable   # (here: `status` imports this module, no numerics)
     if row["state"] == "done" and (why := unusable(plan, sweep)):   # rebuild it
         catalogue.finish(plan.sweep_id, "cancelled", message=f"{why}; re-queued")
         row = {**catalogue.enqueue(plan.sweep_id), "message": f"{why}; re-queued"}

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import store
 
-from ..estimates.error_reruns import needs_estimate
 from .lease_holder import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
 
@@ -45,6 +44,8 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
     ``status`` had no estimate to show). Without a lease (nothing was left to compute) the
     row is settled unless a live process holds it.
     """
+    from ..estimates.error_reruns import needs_estimate   # (numerics: not at import)
+
     counts = point_counts(cube)
     n = cube["status"].size
     n_done_blocks = len(done_blocks(plan, cube))
@@ -138,6 +139,8 @@ def unusable(plan, sweep) -> str | None:
     unreadable (a truncated or foreign file), or every point final but its error estimate
     never computed (a stop between the last block and the estimate). Before, only a missing
     cube was queued again: ``submit --detach`` said "done, already complete" over the others."""
+    from ..estimates.error_reruns import needs_estimate
+
     try:
         cube = store.read_cube(sweep.cube)
     except FileNotFoundError:
