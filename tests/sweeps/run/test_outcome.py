@@ -12,7 +12,7 @@ import store
 from sweeps.api import run_sweep
 from sweeps.estimates.error_reruns import ESTIMATE_FILE, needs_estimate
 from sweeps.planning.plan import make_plan
-from sweeps.run.lease_holder import CANCELLED, SHUTDOWN
+from sweeps.run.lease_holder import CANCELLED, SHUTDOWN, Lease
 from sweeps.run.outcome import final_result
 from sweeps.spec import parse_spec
 
@@ -41,19 +41,13 @@ def finished(tmp_path_factory):
 @pytest.mark.parametrize("stopped, state", [(CANCELLED, "cancelled"), (SHUTDOWN, "queued")])
 def test_a_stop_before_the_estimate_leaves_the_sweep_to_resume(finished, stopped, state):
     plan, sweep, catalogue, cube = finished
-
-    class Lease:   # what final_result needs of a lease: who holds it, its end
-        owner = "serve-test"
-        ended = None
-
-        def end(self, state, **fields):
-            self.ended = (state, fields["message"])
-
-    lease = Lease()
+    lease, _ = Lease.take(catalogue, plan.sweep_id)   # (the row is running under us now)
     res = final_result(plan, sweep, catalogue, cube, blocks_run=0, t0=time.perf_counter(),
                        timings={}, lease=lease, stopped=stopped)
-    assert res.state == state and lease.ended[0] == state
+    row = catalogue.get(plan.sweep_id)
+    assert res.state == state and row["state"] == state, (res, row)
     assert "before the error estimate" in res.message, res.message
+    assert row["message"] == res.message
 
 
 def test_without_a_stop_the_finished_sweep_is_done(finished):
