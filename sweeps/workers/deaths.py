@@ -19,6 +19,7 @@ are counted the same way (sweeps.estimates.error_reruns.SampleRuns.rescue).
 """
 from __future__ import annotations
 
+import functools
 import logging
 
 log = logging.getLogger("ditherlab")
@@ -77,9 +78,14 @@ class Deaths:
 
     def __init__(self, counting: bool = True):
         self.counting = counting
-        self.allowed = allowed_failures()
         self.of_block: dict[int, int] = {}
         self.alone: set[int] = set()         # blocks to run one a task from now on
+
+    @functools.cached_property
+    def allowed(self) -> int:
+        """dask's allowed-failures, read when first needed: a run on threads (no worker
+        processes to die) never imports dask for it (0.12 s of a small sweep's start)."""
+        return allowed_failures()
 
     def requeue(self, blocks: list[int], died: int | None) -> tuple[list[int], list[int]]:
         """A task of ``blocks`` did not finish and ``died`` workers died while it was on
