@@ -16,11 +16,12 @@ from sweeps.run.lease_holder import CANCELLED, SHUTDOWN, Lease
 from sweeps.run.outcome import final_result
 from sweeps.spec import parse_spec
 
-# 4 draft LuGre points, short: run on threads of this process in a few seconds
-SPEC = {"name": "outcome", "friction": "lugre", "dither": "none", "method": "simulate",
-        "outputs": ["v_mean"], "accuracy": "draft",
+# 4 draft LuGre points, short: run on threads of this process in a few seconds; the scene
+# of test_fixed_costs and test_progress_phases here (one compilation for the three)
+SPEC = {"name": "outcome", "friction": "lugre", "dither": "square-velocity",
+        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
         "time": {"t_end": 4.0, "t_transient": 1.0},
-        "grid": {"v_ref": [0.2, 0.4], "v_d": [0.05, 0.1]}}
+        "grid": {"W": [0.1, 0.3], "omega": [100.0], "v_ref": [0.2, 0.4], "v_d": [0.1]}}
 
 
 @pytest.fixture(scope="module")
