@@ -56,9 +56,9 @@ class Param:
 
     def check(self, name: str, value) -> list[float]:
         """The value as a list of floats, or ModelError naming what is allowed."""
-        values = list(value) if self.vector else [value]
         if self.vector and not isinstance(value, (list, tuple)):
             raise ModelError(f"{name}: expected a list of numbers, got {value!r}")
+        values = list(value) if self.vector else [value]
         if self.vector and not 1 <= len(values) <= self.max_len:
             raise ModelError(f"{name}: expected 1 to {self.max_len} values, got {len(values)}")
         out = []

@@ -116,6 +116,26 @@ def _check_declarations(kind: str, ref: str, obj) -> None:
     if clash:
         raise ModelError(f"{kind} {ref!r}: parameter {clash[0]!r} is a shared parameter "
                          "(engine.params); give it another name")
+    for pname, par in params.items():
+        try:
+            bad = not (float(par.lo) <= float(par.hi))
+        except (TypeError, ValueError):
+            bad = True
+        if bad:
+            raise ModelError(f"{kind} {ref!r}: parameter {pname!r}: lo and hi must be numbers "
+                             f"with lo <= hi, got lo={par.lo!r}, hi={par.hi!r}")
+    group = getattr(obj, "group", None)
+    if group is not None and not (isinstance(group, str) and group.isidentifier()):
+        raise ModelError(f"{kind} {ref!r}: its group must be None or an identifier, got "
+                         f"{group!r}")
+    if kind == "friction":
+        phases = getattr(obj, "phases", None)
+        if phases not in ("band", "alpha"):   # ("elasto": the built-in elasto-plastic law's)
+            raise ModelError(f"{kind} {ref!r}: phases must be 'band' or 'alpha' (docs/MODELS.md "
+                             f"rule 6), got {phases!r}")
+        if not isinstance(getattr(obj, "switch_jumps", False), bool):
+            raise ModelError(f"{kind} {ref!r}: switch_jumps must be True or False, got "
+                             f"{obj.switch_jumps!r}")
 
 
 def source_digest(ref: str) -> str | None:
@@ -163,8 +183,24 @@ def own_params(model) -> dict:
     return dict(getattr(model, "params", {}) or {})
 
 
+def check_pair(friction: str, system_: str) -> None:
+    """A law and a system whose own parameters (or parameter tables) share a name are
+    refused: one slot of ``p`` and one spec key cannot hold two values (before, the later
+    one silently set both)."""
+    law_, sys_ = law(friction), system(system_)
+    both = sorted(set(own_params(law_)) & set(own_params(sys_)))
+    if both:
+        raise ModelError(f"parameter {both[0]!r} is declared by both friction {friction!r} and "
+                         f"system {system_!r}: rename it in one of the two models")
+    group = getattr(law_, "group", None)
+    if group and group == getattr(sys_, "group", None):
+        raise ModelError(f"friction {friction!r} and system {system_!r} both take their "
+                         f"parameters as the table {group!r}: rename one group")
+
+
 @functools.cache
 def layout(friction: str, system_: str, sizes: tuple) -> Layout:
+    check_pair(friction, system_)
     sized = dict(sizes)
     extras, i = [], P.N_PARAMS
     for owner in (law(friction), system(system_)):
@@ -193,6 +229,7 @@ def sizes_of(friction: str, system_: str, values: dict) -> tuple:
 def check_values(friction: str, system_: str, values: dict) -> dict:
     """The models' own parameter values, checked (unknown name, type, range, required):
     name -> list of floats. ModelError names the first fault."""
+    check_pair(friction, system_)
     known: dict[str, tuple[Param, str]] = {}
     for owner in (law(friction), system(system_)):
         for name, par in own_params(owner).items():

@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
+import numbers
 import sys
 import traceback
 from pathlib import Path
@@ -78,6 +79,24 @@ def where(exc: BaseException, module=None) -> str:
             continue
         return f" (at {path.name} line {frame.lineno})"
     return ""
+
+
+def hook(ref: str, what: str, fn, *args, count: bool = False):
+    """``fn(*args)``: a model's own hook (``n_states``, ``effects``, ...), any fault of it as
+    one ModelError line naming the model, the hook and the user's file and line. ``count``:
+    the result must be a whole number (before, ``int()`` cut 2.5 to 2 states)."""
+    try:
+        value = fn(*args)
+    except ModelError:
+        raise
+    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        raise ModelError(f"{ref!r}: {what} failed: {one_line(exc)}{where(exc)}") from None
+    if not count:
+        return value
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) \
+            or not float(value).is_integer():
+        raise ModelError(f"{ref!r}: {what} must return a whole number, got {short(value)}")
+    return int(value)
 
 
 # The child of :func:`isolated`: sys.path, then (fn, args) from stdin; ("ok", value) or

@@ -18,6 +18,7 @@ from typing import NamedTuple
 from .. import registry
 from ..contract import Build, ModelError
 from ..jit import njit
+from ..user_code import hook
 from ..phase_book import N_HIST, O_ON, O_SIZE, O_T0
 
 
@@ -58,19 +59,20 @@ def build_context(scene, jit=njit) -> tuple:
                          f"({', '.join(sysm.dithers)})")
     lay = registry.scene_layout(scene)
     size = lay.size
-    n_sys = int(sysm.n_states(scene))
-    n_law = int(law.n_states(size))
-    n_modes = int(law.n_modes(size))
+    n_sys = hook(scene.system, "n_states", sysm.n_states, scene, count=True)
+    n_law = hook(scene.friction, "n_states", law.n_states, size, count=True)
+    n_modes = hook(scene.friction, "n_modes", law.n_modes, size, count=True)
     for what, k in (("states", n_law), ("modes", n_modes)):
         if not 0 <= k <= registry.MAX_STATES:
             raise ModelError(f"friction {scene.friction!r}: {k} {what}; 0 to "
                              f"{registry.MAX_STATES} allowed")
     qf = n_sys + n_law if "F_mean" in scene.outputs else -1
     tail0 = n_sys + n_law + (qf >= 0)
-    m0 = tail0 + int(sysm.n_tail(scene))
+    m0 = tail0 + hook(scene.system, "n_tail", sysm.n_tail, scene, count=True)
     b = Build(jit=jit, scene=scene, ix=lay.ix, size=size, z0=n_sys, n_law=n_law, m0=m0,
               qf=qf, tail0=tail0)
-    b.n_err = int(sysm.error_size(scene, law, n_law, m0))
+    b.n_err = hook(scene.system, "error_size", sysm.error_size, scene, law, n_law, m0,
+                   count=True)
     return law, sysm, b
 
 

@@ -18,6 +18,7 @@ import numpy as np
 from engine import params as P
 from engine import registry
 from engine.scene import Scene
+from engine.user_code import hook
 
 from ..spec.accuracy import Numerics, numerics
 from ..spec.grid import GridFacts, base_params
@@ -99,7 +100,7 @@ class Plan:
         eff = {"stribeck": s.stribeck, "bristle damping": s.bristle_damping,
                "viscous term": s.viscous, "slow force": s.slow_force,
                "dither": s.dither != "none"}
-        eff.update(registry.law(s.friction).effects(s))
+        eff.update(hook(s.friction, "effects", registry.law(s.friction).effects, s))
         return eff
 
     @property

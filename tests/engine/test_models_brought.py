@@ -135,7 +135,40 @@ BAD.update({
     "out-of-range-parameter": (_law(), "X", {"a": 3.0}, "params.a: 3.0 is outside the allowed range [0, 2]"),
     "missing-ix": (_law().replace('b.ix["a"]', 'b.ix["nope"]'), "X", {},
                    "KeyError while building"),
+    # found by review (2026-11-28): an internal error (exit 1) or silently taken before
+    "n-states-raises": (_law(n='size["k"]'), "X", {},
+                        "'badlaw_n_states_raises:X': n_states failed: KeyError: 'k' (at "
+                        "badlaw_n_states_raises.py line 9)"),
+    "n-states-not-whole": (_law(n="2.5"), "X", {}, "n_states must return a whole number, "
+                           "got 2.5"),
+    "phases-typo": (_law().replace('name = "x"', 'name = "x"\n    phases = "Band"'), "X", {},
+                    "phases must be 'band' or 'alpha' (docs/MODELS.md rule 6), got 'Band'"),
+    "lo-above-hi": (_law().replace("lo=0.0, hi=2.0", "lo=2.0, hi=0.0"), "X", {},
+                    "parameter 'a': lo and hi must be numbers with lo <= hi"),
 })
+
+
+def test_a_law_and_a_system_that_share_a_parameter_name_are_refused(tmp_path, monkeypatch):
+    """Before, one value set both the law's own ``m`` and the servo's mass ``m`` (one slot of
+    p, one spec key), and the law's range was never checked."""
+    source = _law().replace('"a": Param', '"m": Param').replace('b.ix["a"]', 'b.ix["m"]')
+    (tmp_path / "clashlaw.py").write_text(textwrap.dedent(source))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = {"friction": "clashlaw:X", "system": "servo", "dither": "none",
+            "outputs": ["v_mean"], "params": {"m": 0.3}}
+    with pytest.raises(SpecError, match="parameter 'm' is declared by both friction "
+                       "'clashlaw:X' and system 'servo': rename it in one of the two models"):
+        load_spec(spec)
+    sys.modules.pop("clashlaw", None)
+
+
+def test_a_number_where_a_vector_parameter_takes_a_list_is_one_line():
+    """``gms = { k = 100.0, ... }`` (a one-element GMS written without brackets) was an
+    internal error, exit 1: ``TypeError: 'float' object is not iterable``."""
+    spec = {"friction": "gms", "dither": "none", "outputs": ["v_mean"],
+            "params": {"gms": {"k": 100.0, "alpha": 1.0, "C": 20.0}}}
+    with pytest.raises(SpecError, match=r"params\.k: expected a list of numbers, got 100\.0"):
+        load_spec(spec)
 
 
 @pytest.mark.parametrize("case", sorted(BAD))
