@@ -92,8 +92,8 @@ def open_cube(path):
         with xr.open_dataset(path, engine="h5netcdf", decode_timedelta=False) as f:
             ds = f.load()
         _check_layout(ds, f"open_cube({path})")
-    except _READ_ERRORS as err:
-        raise _unreadable(path, err) from err
+    except READ_ERRORS as err:
+        raise unreadable(path, err) from err
     return ds
 
 
@@ -113,12 +113,12 @@ def read_cube(path) -> Cube:
             cube = Cube(coords, {k: var(v) for k, v in f.variables.items() if k not in coords},
                         dict(f.attrs))
         _check_layout(cube, f"read_cube({path})")
-    except _READ_ERRORS as err:
-        raise _unreadable(path, err) from err
+    except READ_ERRORS as err:
+        raise unreadable(path, err) from err
     return cube
 
 
-_READ_ERRORS = (OSError, KeyError, ValueError, RuntimeError)   # h5py: a torn file raises
+READ_ERRORS = (OSError, KeyError, ValueError, RuntimeError)   # h5py: a torn file raises
 
 
 def _existing(path) -> Path:
@@ -128,7 +128,9 @@ def _existing(path) -> Path:
     return path
 
 
-def _unreadable(path: Path, err: Exception) -> CubeError:
+def unreadable(path: Path, err: Exception) -> CubeError:
+    """The CubeError of a cube file that ``err`` (one of :data:`READ_ERRORS`) kept from
+    being read: what went wrong, and the command that republishes it."""
     text = f"{type(err).__name__}: {err}".replace("\n", " ")
     return CubeError(f"the cube at {path} is unreadable ({text[:160]}); {republish_hint(path)}")
 

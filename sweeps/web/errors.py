@@ -4,6 +4,8 @@ here: the drawing processes import it too. A handler that knows the status itsel
 ``tornado.web.HTTPError(status, sentence)``."""
 from __future__ import annotations
 
+from store.errors import StoreError
+
 from ..errors import RefusedError, UserError
 
 
@@ -18,6 +20,7 @@ STATUS = (
     (OverflowError, 413),   # a cube over the size the web view serves
     (RefusedError, 400),    # a field, a selection or a spec refused
     (UserError, 409),       # the store disagrees (a cube of another sweep in its folder)
+    (StoreError, 409),      # a cube that cannot be read (store.cube_io.CubeError)
 )
 SENTENCES = {404: "not found", 405: "this server only reads: GET and HEAD are answered"}
 

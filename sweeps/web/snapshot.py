@@ -66,6 +66,13 @@ class Cubes:
         held = self._held.get(path)
         if held is not None and held.key == key:
             return held
-        snap = CubeSnapshot(*read_cube_bytes(path))
+        from store.cube_io import READ_ERRORS, unreadable
+
+        try:
+            snap = CubeSnapshot(*read_cube_bytes(path))
+        except FileNotFoundError:   # gone since the stat: no cube (404)
+            raise
+        except READ_ERRORS as err:   # a torn or foreign file: 409 and how to republish it,
+            raise unreadable(path, err) from err   # as `ditherlab status` says (was a 500)
         self._held.put(path, snap)
         return snap

@@ -109,10 +109,15 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     from ..lookup import open_checked
     from ..overview import sweep_detail
 
+    from store.cube_io import CubeError
+
     cube_path = ctx.cube_path(sweep_id)
-    ds = None
+    ds, cube_error = None, None
     if cube_path.exists():
-        ds = open_checked(sweep_id, cube_path, ctx.cubes.get).ds
+        try:
+            ds = open_checked(sweep_id, cube_path, ctx.cubes.get).ds
+        except CubeError as err:   # a torn cube: the page without it, saying how to repair
+            cube_error = ctx.shown(str(err))
     detail = sweep_detail(ctx.root, sweep_id, ds)
     from ..estimates.time_history import recorded
 
@@ -120,7 +125,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
                                                                                   detail["spec"]),
             "time_estimate": recorded(ctx.root, sweep_id),
             "estimate": _estimate(detail), "has_cube": ds is not None, "maps": [],
-            "variables_names": []}
+            "variables_names": [], "cube_error": cube_error}
     if ds is None:
         return view
     view.update(axes=_axes(ds), variables=_variables(ds), counts=_counts(ds),

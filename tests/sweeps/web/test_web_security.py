@@ -246,6 +246,35 @@ def test_a_cube_of_another_sweep_is_refused_without_the_servers_folders(web_stor
         assert str(tmp_path) not in text, text
 
 
+def test_a_torn_cube_is_a_409_saying_how_to_republish_and_its_page_still_shows(
+        web_store, serve_ctx, tmp_path):
+    """A truncated cube.nc (found by review, 2026-11-28): every page of the sweep answered a
+    bare 500 and logged a traceback, while `ditherlab status` names the fault and the repair.
+    Now its downloads are a 409 with that sentence, and its page shows the state, the spec
+    and the sentence, without the server's folders."""
+    from sweeps.web.app import ServerState
+
+    root = tmp_path / "copy"
+    shutil.copytree(web_store["root"], root)
+    avg = web_store["avg"]
+    cube = root / avg / "cube.nc"
+    cube.write_bytes(cube.read_bytes()[:1000])
+    base = serve_ctx(ServerState(root))
+    for path in (f"/sweep/{avg}/cube.nc", f"/sweep/{avg}/query.csv"):
+        status, _, body = request(base, path)
+        text = body.decode()
+        assert status == 409, (path, status, text)
+        assert text.startswith(f"the cube at {avg}/cube.nc is unreadable (") and \
+            f"ditherlab submit {avg}/spec.json --store the store" in text, text
+        assert str(tmp_path) not in text, text
+    status, _, body = request(base, f"/sweep/{avg}")
+    page = body.decode()
+    assert status == 200, page
+    [line] = [ln for ln in page.splitlines() if "unreadable</span>: the cube at " in ln]
+    assert f"the cube at {avg}/cube.nc is unreadable (" in line and str(tmp_path) not in line
+    assert "Grid and variables" not in page    # nothing drawn from the torn file
+
+
 def test_the_one_cache_keeps_the_most_recent_entries_within_its_weight():
     from sweeps.web.lru import LRU
 
