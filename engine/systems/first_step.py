@@ -62,13 +62,28 @@ def _probe_parts(scene, p) -> None:
     law, sysm, b = build_context(scene)
     if not registry.is_import_path(scene.friction):
         return
-    n = b.m0 + int(law.n_modes(b.size)) + 8
-    y, dy, g = np.zeros(n), np.zeros(n), np.zeros(max(1, 1 + n))
+    n_modes = int(law.n_modes(b.size))
+    n = b.m0 + n_modes + 8
+    y, dy, g = np.full(n, SENTINEL), np.full(n, SENTINEL), np.zeros(max(1, 1 + n))
     try:
         lk = law.build(b)
         lk.init(p, y)
-        F = lk.rates(0.1, y, dy, 0.0, p)
-        where = lk.rates
+        strays = _strays(y, (b.z0, b.z0 + b.n_law), (b.m0, b.m0 + n_modes))
+        y[y == SENTINEL] = 0.0
+        where = lk.init
+        if strays is None:
+            F = lk.rates(0.1, y, dy, 0.0, p)
+            where = lk.rates
+            strays = _strays(dy, (b.z0, b.z0 + b.n_law))
+        if strays is not None:
+            # inside the system's vector, so no bounds fault: before, a write to the slot
+            # after the law's states went to the F quadrature or a mode (which the system
+            # then overwrote), and the numbers were wrong without a word
+            name = getattr(getattr(where, "py_func", where), "__name__", "rates")
+            raise ModelError(f"{scene.friction}: {name} writes slot "
+                             f"{strays} of the state vector, outside its {b.n_law} states "
+                             f"(slots {b.z0} to {b.z0 + b.n_law - 1}) and {n_modes} modes: "
+                             f"index them from b.z0 and check n_states{_def_at(where)}")
         if not isinstance(F, float):
             raise ModelError(f"{scene.friction}: rates must return the friction force (a "
                              f"number), got {type(F).__name__}{_def_at(where)}")
@@ -86,6 +101,18 @@ def _probe_parts(scene, p) -> None:
         raise
     except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
         raise ModelError(compile_line(scene, exc)) from None
+
+
+def _strays(values, *allowed) -> int | None:
+    """The first slot of ``values`` written (no longer SENTINEL) outside the ``allowed``
+    half-open ranges, or None."""
+    import numpy as np
+
+    inside = np.zeros(values.size, dtype=bool)
+    for lo, hi in allowed:
+        inside[lo:hi] = True
+    written = np.flatnonzero((values != SENTINEL) & ~inside)
+    return int(written[0]) if written.size else None
 
 
 def _def_at(fn) -> str:

@@ -118,7 +118,8 @@ def _law(n=1, rates=_GOOD_RATES):
 BAD.update({
     "too-many-writes": (_law(n=1, rates="            dy[Z] = u\n            dy[Z + 1] = u\n"
                                         "            dy[Z + 2] = u\n            return y[Z]"),
-                        "X", {}, "writes beyond the"),
+                        "X", {}, "rates writes slot 3 of the state vector, outside its 1 "
+                        "states (slots 2 to 2) and 0 modes"),
     "too-few-states-written": (_law(n=2), "X", {}, "gives no rate for state 3"),
     "numba-cannot-compile": (_law(rates="            dy[Z] = u + 'a'\n            return u"),
                              "X", {}, "numba cannot compile"),
@@ -146,6 +147,24 @@ BAD.update({
     "lo-above-hi": (_law().replace("lo=0.0, hi=2.0", "lo=2.0, hi=0.0"), "X", {},
                     "parameter 'a': lo and hi must be numbers with lo <= hi"),
 })
+
+
+def test_a_write_past_the_laws_states_into_another_slot_is_refused(tmp_path, monkeypatch):
+    """One state declared, two used: with F_mean asked for, slot Z + 1 is the system's F
+    quadrature, so the write stayed inside the vector (no bounds fault, no rate left unset)
+    and the law's second "state" was the integral of F: wrong numbers, no word (found by
+    review, 2026-11-28). The law's own writes are now checked against its slots."""
+    rates = ("            dy[Z] = u - y[Z]\n            dy[Z + 1] = y[Z]\n"
+             "            return p[ia] * (y[Z] + y[Z + 1])")
+    (tmp_path / "strayslot.py").write_text(textwrap.dedent(_law(rates=rates)))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = {"friction": "strayslot:X", "dither": "none", "outputs": ["v_mean", "F_mean"],
+            "time": {"t_end": 2.0, "t_transient": 1.0}}
+    with pytest.raises(SpecError, match=r"strayslot:X: rates writes slot 3 of the state "
+                       r"vector, outside its 1 states \(slots 2 to 2\) and 0 modes: index "
+                       r"them from b\.z0 and check n_states \(at strayslot\.py line 14\)"):
+        load_spec(spec)
+    sys.modules.pop("strayslot", None)
 
 
 def test_a_law_and_a_system_that_share_a_parameter_name_are_refused(tmp_path, monkeypatch):
