@@ -139,7 +139,10 @@ def _check_declarations(kind: str, ref: str, obj) -> None:
 
 
 def source_digest(ref: str) -> str | None:
-    """sha256 (12 hex) of the source file of a brought model's module; None for a built-in
+    """sha256 (12 hex) of a brought model's source: every ``.py`` file of its top-level
+    package (paths and contents) when the module is in one, so that an edit of a helper
+    module it imports makes a new sweep too (before, only the named module's file was
+    hashed); the file alone for a top-level module or a file path. None for a built-in
     (the engine's fingerprint covers those)."""
     if not is_import_path(ref):
         return None
@@ -148,9 +151,18 @@ def source_digest(ref: str) -> str | None:
         path = Path(module_name)
     else:
         try:
+            top = importlib.util.find_spec(module_name.split(".")[0])
             spec = importlib.util.find_spec(module_name)
         except (ImportError, ValueError):
-            spec = None
+            top = spec = None
+        folders = list(getattr(top, "submodule_search_locations", None) or [])
+        if folders:   # a package: all of it
+            from .provenance import source_hash
+
+            try:
+                return source_hash(folders[0])
+            except OSError:
+                return None
         if spec is None or not spec.origin:
             return None
         path = Path(spec.origin)

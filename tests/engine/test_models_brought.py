@@ -58,7 +58,16 @@ def test_a_spec_names_the_example_and_its_source_is_in_the_sweep_id(tmp_path, mo
     assert load_spec(spec).sweep_id == first
     (pkg / "laws.py").write_text(source + "\n# an edit\n")
     registry.resolve.cache_clear()
-    assert load_spec(spec).sweep_id != first
+    second = load_spec(spec).sweep_id
+    assert second != first
+    # a helper module of the package is code of the model too (before, only laws.py was
+    # hashed: an edit of a helper it imports kept the id, and the old cube was served)
+    (pkg / "common.py").write_text("SCALE = 1.0\n")
+    registry.resolve.cache_clear()
+    third = load_spec(spec).sweep_id
+    (pkg / "common.py").write_text("SCALE = 2.0\n")
+    registry.resolve.cache_clear()
+    assert len({first, second, third, load_spec(spec).sweep_id}) == 4
 
 
 BAD = {
