@@ -15,7 +15,7 @@ from store.record import BlockRecord
 
 from . import error_estimate as errest
 from ..workers import task
-from ..workers.deaths import Deaths, crash_line, died_running
+from ..workers.deaths import Deaths, crash_line, died_running, killed_worker
 from ..workers.matching import WorkersGoneError
 from ..planning.plan import Plan, work_s
 
@@ -179,6 +179,11 @@ class SampleRuns:
                 if idle is not None:
                     idle()
                 time.sleep(GATHER_TICK_S)
+        if self.deaths.counting and any(killed_worker(f) for f, _ in self.groups):
+            # dask gave a re-run up itself (its allowed-failures) before rescue() did: the
+            # same line as rescue's, not KilledWorker's text (as the dispatch does a block)
+            self.cancel(client)
+            raise RuntimeError(f"a re-run was given up: {crash_line(self.deaths.allowed + 1)}")
         records = client.gather([f for f, _ in self.groups])
         of_rerun = {}
         for (_, group), record in zip(self.groups, records):

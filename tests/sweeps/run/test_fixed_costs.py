@@ -221,3 +221,46 @@ def test_the_cluster_starts_before_the_store_is_read_for_a_new_and_a_resumed_swe
     submit(plan, store, Compute(workers=1))
     with monkeypatch.context() as m:
         assert _early_starts(plan, store, m) == ["read"]
+
+
+class _Finished:
+    """A finished task as the dispatch sees one: its status and its exception."""
+
+    def __init__(self, exc=None):
+        self.status, self._exc = ("error" if exc else "finished"), exc
+
+    def done(self) -> bool:
+        return True
+
+    def exception(self):
+        return self._exc
+
+
+def test_a_rerun_dask_gave_up_itself_is_ditherlabs_line_not_killed_workers_text():
+    """A brought model's re-run whose workers kept dying: when dask gives the task up
+    (KilledWorker, its allowed-failures) before rescue() does, gather says so in the line a
+    block gets (sweeps.workers.deaths.crash_line). Before, the estimate's warning carried
+    dask's own text: seen in the crashing-law test with allowed-failures = 1 under load."""
+    from distributed import KilledWorker
+
+    runs = SampleRuns(make_plan(parse_spec(SPEC)))
+    runs.deaths.counting = True   # (a brought model's run)
+    for k, i in enumerate(runs.order):
+        f = _Finished(KilledWorker("compute_block-x", None, 1) if k == 0 else None)
+        runs.futures[int(i)] = f
+        runs.groups.append((f, [int(i)]))
+
+    class Client:
+        cancelled: list = []
+
+        def cancel(self, futures):
+            self.cancelled.append(futures)
+
+        def gather(self, futures):
+            raise AssertionError("a given-up re-run is not gathered")
+
+    client = Client()
+    with pytest.raises(RuntimeError, match=r"^a re-run was given up: \d+ worker processes died "
+                       r"computing it \(a crash in compiled code"):
+        runs.gather(client)
+    assert client.cancelled   # the other re-runs are cancelled, not left running
