@@ -51,11 +51,12 @@ def died_running(client, futures) -> dict | None:
 
 
 def killed_worker(future) -> bool:
-    """The task erred because its workers kept dying (dask's ``KilledWorker``)."""
+    """The task erred because its workers kept dying (dask's ``KilledWorker``); never for a
+    thread's ``concurrent.futures.Future`` (no worker processes: no ``status`` either)."""
+    if getattr(future, "status", None) != "error":
+        return False
     from distributed import KilledWorker
 
-    if future.status != "error":
-        return False
     try:
         return isinstance(future.exception(), KilledWorker)
     except Exception:  # noqa: BLE001 -- cancelled or gone meanwhile

@@ -264,3 +264,14 @@ def test_a_rerun_dask_gave_up_itself_is_ditherlabs_line_not_killed_workers_text(
                        r"computing it \(a crash in compiled code"):
         runs.gather(client)
     assert client.cancelled   # the other re-runs are cancelled, not left running
+
+
+def test_a_brought_models_reruns_on_threads_are_gathered():
+    """A brought model's re-runs on threads (a GPU sweep's estimate): counting deaths, the
+    check for a task dask gave up must pass a thread's future by (it has no ``status``:
+    an AttributeError ended the estimate in f878fd9)."""
+    runs = SampleRuns(make_plan(parse_spec(SPEC)))
+    runs.deaths.counting = True   # (a brought model's run)
+    with ThreadClient(2) as client:
+        record = runs.gather(client)
+    assert len(record.status) == len(runs.order) and (record.status == 0).all()
