@@ -79,12 +79,7 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
     spec = tmp_path / "crash.toml"
     spec.write_text(SPEC)
     store = tmp_path / "cubes"   # (not "store": on PYTHONPATH it would hide the package)
-    # dask gives a task to another worker after a death, and gives it up after
-    # allowed-failures + 1 deaths (default 3): set to 1, each crashing block costs two worker
-    # restarts, not four (the same path, half the test's time). Whichever gives a re-run up
-    # first, dask or ditherlab's count, the line is ditherlab's (error_reruns.gather)
-    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg",
-           "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg"}
     # crashes at W = 0.2 and 1, and would at the workers' warm-up point (W = 0.1): the
     # kernel of a brought model is compiled there on no point at all
     spec.write_text(SPEC + "[params]\ncrash_at = 0.05\n")
