@@ -11,6 +11,7 @@ import hashlib
 import importlib
 import importlib.util
 import numbers
+import os
 import sys
 import traceback
 from pathlib import Path
@@ -122,6 +123,20 @@ import os
 os._exit(0)   # (the result is out: a crash while tearing down is not the user's)
 """
 CRASHES = {"SIGSEGV", "SIGBUS", "SIGILL", "SIGFPE", "SIGABRT"}   # a fault in compiled code
+TIMEOUT_ENV = "DITHERLAB_MODEL_TIMEOUT_S"   # how long :func:`isolated` waits for a result
+TIMEOUT_S = 600.0   # compiling a brought model's kernels takes 10-60 s; its sample points more
+
+
+def timeout_s() -> float:
+    """``$DITHERLAB_MODEL_TIMEOUT_S`` (seconds, > 0), else :data:`TIMEOUT_S`."""
+    text = os.environ.get(TIMEOUT_ENV, "").strip()
+    try:
+        value = float(text) if text else TIMEOUT_S
+    except ValueError:
+        raise ModelError(f"{TIMEOUT_ENV}={text!r}: expected a number of seconds") from None
+    if not value > 0:
+        raise ModelError(f"{TIMEOUT_ENV}={text!r}: expected a number of seconds above 0")
+    return value
 
 
 def isolated(who: str, fn, *args):
@@ -133,17 +148,24 @@ def isolated(who: str, fn, *args):
     (``fn`` by its module and name); ``fn``'s exceptions are raised again here (its
     ModelError lines unchanged), its value returned. The child has this process's
     environment and ``sys.path`` (a user's module found from the current folder too); its
-    output is shown only when it ends without a result. Costs a Python start (~1 s)."""
+    output is shown only when it ends without a result. Costs a Python start (~1 s). A child
+    without a result after :func:`timeout_s` (an endless loop in a kernel: it hung ``plan``)
+    is killed, and that is one line too."""
     import pickle
     import signal
     import subprocess
     import tempfile
 
+    limit = timeout_s()
     with tempfile.TemporaryDirectory(prefix="ditherlab-isolated-") as tmp:
         result = Path(tmp) / "result.pickle"
-        proc = subprocess.run([sys.executable, "-c", _CHILD, str(result)],
-                              input=pickle.dumps(list(sys.path)) + pickle.dumps((fn, args)),
-                              capture_output=True)
+        try:
+            proc = subprocess.run([sys.executable, "-c", _CHILD, str(result)],
+                                  input=pickle.dumps(list(sys.path)) + pickle.dumps((fn, args)),
+                                  capture_output=True, timeout=limit)
+        except subprocess.TimeoutExpired:   # (subprocess.run killed the child)
+            raise ModelError(f"{who}: no result after {limit:g} s -- an endless loop in its "
+                             f"kernels? ({TIMEOUT_ENV} sets how long to wait)") from None
         if result.exists():
             try:
                 status, value = pickle.loads(result.read_bytes())

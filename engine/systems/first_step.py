@@ -54,53 +54,96 @@ def probe(scene, p) -> None:
 
 
 def _probe_parts(scene, p) -> None:
-    """A brought law's kernels compiled and called one by one (so that numba's complaint
-    names the user's function, not the engine code it is inlined into), and the types of
-    what they return checked against the contract."""
-    import numpy as np
-
+    """A brought model's kernels compiled and called one by one (so that numba's complaint
+    names the user's function, not the engine code it is inlined into), their writes checked
+    against the model's own slots of the state vector, and the types of what they return
+    checked against the contract."""
     law, sysm, b = build_context(scene)
-    if not registry.is_import_path(scene.friction):
-        return
-    n_modes = int(law.n_modes(b.size))
-    n = b.m0 + n_modes + 8
-    y, dy, g = np.full(n, SENTINEL), np.full(n, SENTINEL), np.zeros(max(1, 1 + n))
+    n_modes = int(law.n_modes(b.size))   # (a whole number: build_context checked it)
     try:
-        lk = law.build(b)
-        lk.init(p, y)
-        strays = _strays(y, (b.z0, b.z0 + b.n_law), (b.m0, b.m0 + n_modes))
-        y[y == SENTINEL] = 0.0
-        where = lk.init
-        if strays is None:
-            F = lk.rates(0.1, y, dy, 0.0, p)
-            where = lk.rates
-            strays = _strays(dy, (b.z0, b.z0 + b.n_law))
-        if strays is not None:
-            # inside the system's vector, so no bounds fault: before, a write to the slot
-            # after the law's states went to the F quadrature or a mode (which the system
-            # then overwrote), and the numbers were wrong without a word
-            name = getattr(getattr(where, "py_func", where), "__name__", "rates")
-            raise ModelError(f"{scene.friction}: {name} writes slot "
-                             f"{strays} of the state vector, outside its {b.n_law} states "
-                             f"(slots {b.z0} to {b.z0 + b.n_law - 1}) and {n_modes} modes: "
-                             f"index them from b.z0 and check n_states{_def_at(where)}")
-        if not isinstance(F, float):
-            raise ModelError(f"{scene.friction}: rates must return the friction force (a "
-                             f"number), got {type(F).__name__}{_def_at(where)}")
-        where = lk.force
-        Fa = lk.force(0.1, y, 0.0, p)
-        if not (isinstance(Fa, tuple) and len(Fa) == 2
-                and all(isinstance(v, float) for v in Fa)):
-            raise ModelError(f"{scene.friction}: force must return (F, alpha), two numbers, "
-                             f"got {type(Fa).__name__}{_def_at(where)}")
-        if lk.switches is not None and lk.n_switches:
-            lk.switches(0.1, y, 0.0, p, g)
-        if lk.update_modes is not None:
-            lk.update_modes(0.1, y, 0.0, p, -1)
+        if registry.is_import_path(scene.friction):
+            _probe_law(scene, law, b, n_modes, p)
+        if registry.is_import_path(scene.system):
+            _probe_system(scene, sysm, b, n_modes, p)
     except ModelError:
         raise
     except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
         raise ModelError(compile_line(scene, exc)) from None
+
+
+def _probe_law(scene, law, b, n_modes: int, p) -> None:
+    import numpy as np
+
+    n = b.m0 + n_modes + 8
+    y, dy, g = np.full(n, SENTINEL), np.full(n, SENTINEL), np.zeros(max(1, 1 + n))
+    lk = law.build(b)
+    lk.init(p, y)
+    strays = _strays(y, (b.z0, b.z0 + b.n_law), (b.m0, b.m0 + n_modes))
+    y[y == SENTINEL] = 0.0
+    where = lk.init
+    if strays is None:
+        F = lk.rates(0.1, y, dy, 0.0, p)
+        where = lk.rates
+        strays = _strays(dy, (b.z0, b.z0 + b.n_law))
+    if strays is not None:
+        # inside the system's vector, so no bounds fault: before, a write to the slot
+        # after the law's states went to the F quadrature or a mode (which the system
+        # then overwrote), and the numbers were wrong without a word
+        raise ModelError(f"{scene.friction}: {_name(where)} writes slot {strays} of the "
+                         f"state vector, outside its {b.n_law} states (slots {b.z0} to "
+                         f"{b.z0 + b.n_law - 1}) and {n_modes} modes: index them from b.z0 "
+                         f"and check n_states{_def_at(where)}")
+    if not isinstance(F, float):
+        raise ModelError(f"{scene.friction}: rates must return the friction force (a "
+                         f"number), got {type(F).__name__}{_def_at(where)}")
+    where = lk.force
+    Fa = lk.force(0.1, y, 0.0, p)
+    if not (isinstance(Fa, tuple) and len(Fa) == 2 and all(isinstance(v, float) for v in Fa)):
+        raise ModelError(f"{scene.friction}: force must return (F, alpha), two numbers, "
+                         f"got {type(Fa).__name__}{_def_at(where)}")
+    if lk.switches is not None and lk.n_switches:
+        lk.switches(0.1, y, 0.0, p, g)
+    if lk.update_modes is not None:
+        lk.update_modes(0.1, y, 0.0, p, -1)
+
+
+def _probe_system(scene, sysm, b, n_modes: int, p) -> None:
+    """A brought system's init and dynamics write only its own slots: its states (from 0)
+    and its tail (quadratures, from b.tail0). Before, a write into the law's first state
+    stayed inside the vector and was overwritten or added silently: wrong numbers."""
+    import numpy as np
+
+    n = b.m0 + n_modes + 8
+    y, dy = np.full(n, SENTINEL), np.full(n, SENTINEL)
+    own = ((0, b.z0), (b.tail0, b.m0))
+    sk = sysm.build(b)
+    sk.init(p, y)
+    where, strays = sk.init, _strays(y, *own)
+    y[y == SENTINEL] = 0.0
+    if strays is None:
+        where = sk.drive
+        drive = sk.drive(0.0, y, p, 1.0)
+        if not (isinstance(drive, tuple) and len(drive) == 3
+                and all(isinstance(v, float) for v in drive)):
+            got = (f"a tuple of {len(drive)}" if isinstance(drive, tuple) else
+                   type(drive).__name__)
+            raise ModelError(f"{scene.system}: drive must return (u, fext, hold), three "
+                             f"numbers, got {got}{_def_at(where)}")
+        where = sk.dynamics
+        sk.dynamics(0.0, y, p, 1.0, drive[0], drive[1], 0.1, dy)
+        strays = _strays(dy, *own)
+    if strays is not None:
+        tail = (f" and its {b.m0 - b.tail0} tail states (slots {b.tail0} to {b.m0 - 1})"
+                if b.m0 > b.tail0 else "")
+        slots = f" (slots 0 to {b.z0 - 1})" if b.z0 else ""
+        raise ModelError(f"{scene.system}: {_name(where)} writes slot {strays} of the state "
+                         f"vector, outside its {b.z0} states{slots}{tail}; the friction "
+                         f"law's states start at b.z0 = {b.z0}: check state_names and "
+                         f"n_tail{_def_at(where)}")
+
+
+def _name(fn) -> str:
+    return getattr(getattr(fn, "py_func", fn), "__name__", "a kernel")
 
 
 def _strays(values, *allowed) -> int | None:

@@ -16,7 +16,7 @@ from ..exports import MAPS, QUERY_FORMATS
 from . import downloads, extra_pages, pages
 from .base import NotFound
 from .explorer import Explorer
-from .live import LiveCatalogue
+from .live import LiveCatalogue, inside_store
 from .lru import LRU
 from .renders import MEDIA, MapCache
 from .snapshot import Cubes
@@ -50,9 +50,8 @@ class ServerState:
         return SweepDir(self.root, sweep_id).cube
 
     def shown(self, text: str) -> str:
-        """``text`` (a store's message) with the store's folder left out: a page names
-        paths inside the store, never the server's folders."""
-        return text.replace(f"{self.root}/", "").replace(str(self.root), "the store")
+        """``text`` with the store's folder left out (:func:`.live.inside_store`)."""
+        return inside_store(self.root, text)
 
     def plan(self, sweep_id: str, spec: dict):
         from .sweep_view import plan_cached

@@ -20,6 +20,12 @@ PAGES = 64   # rendered pages kept (pages.py), forgotten at every catalogue chan
 IDLE_REFRESH_S = 2.0   # unchanged files: read again this often (a runner may have died)
 
 
+def inside_store(root: Path, text: str) -> str:
+    """``text`` (a store's message, a sweep's folder) with the store's folder left out: a
+    page names paths inside the store, never the server's folders."""
+    return text.replace(f"{root}/", "").replace(str(root), "the store")
+
+
 class LiveCatalogue:
     def __init__(self, root: Path, refresh_s: float = REFRESH_S):
         self.root, self.refresh_s = Path(root), refresh_s
@@ -46,6 +52,10 @@ class LiveCatalogue:
         summary = store_summary(self.root, self._warnings)
         self._files = files
         self._read_at = time.monotonic()
+        for r in summary["sweeps"]:   # (the folder, a message or warning naming a path)
+            r["folder"], r["message"] = (inside_store(self.root, r[k]) for k in
+                                         ("folder", "message"))
+            r["warnings"] = [inside_store(self.root, w) for w in r["warnings"]]
         fresh = {r["sweep_id"]: r for r in summary["sweeps"]}
         changed = [i for i, r in fresh.items()
                    if {k: v for k, v in self._rows.get(i, {}).items() if k != "seq"} != r]

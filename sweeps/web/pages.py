@@ -39,7 +39,7 @@ class Catalogue(Base):
         html = live.pages.get(key)
         if html is None:   # one rendering per catalogue change and view, for every reader
             html = await in_executor(_render, rows, servers, q, state, sort, desc, cursor,
-                                     str(self.ctx.root))
+                                     self.ctx.root.name)   # (its name: no server folder)
             live.pages.put(key, html)
         self.set_header("Content-Type", "text/html; charset=utf-8")
         self.finish(html)

@@ -119,6 +119,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
         except CubeError as err:   # a torn cube: the page without it, saying how to repair
             cube_error = ctx.shown(str(err))
     detail = sweep_detail(ctx.root, sweep_id, ds)
+    detail["folder"] = ctx.shown(detail["folder"])   # inside the store, as the errors say
     from ..estimates.time_history import recorded
 
     view = {"detail": detail, "toml": spec_toml(detail["spec"]), "plan": ctx.plan(sweep_id,

@@ -176,6 +176,97 @@ def test_a_write_past_the_laws_states_into_another_slot_is_refused(tmp_path, mon
     sys.modules.pop("strayslot", None)
 
 
+_SYSTEM = '''
+from engine.contract import MechanicalSystem, Param, SystemKernels
+
+class Mass(MechanicalSystem):
+    name = "mass"
+    state_names = ("v",)
+    dithers = ("none",)
+    params = {{"c": Param(1.0, "1", "a damper", lo=0.0)}}
+
+    def build(self, b):
+        ic = b.ix["c"]
+
+        @b.jit(inline="always")
+        def drive(t, y, p, sq):
+            return {drive}
+
+        @b.jit(inline="always")
+        def dynamics(t, y, p, sq, u, fext, F, dy):
+            dy[0] = 1.0 - p[ic] * y[0] - F
+{dynamics}
+
+        @b.jit(inline="always")
+        def position(t, y, p):
+            return 0.0
+
+        @b.jit(inline="always")
+        def velocity(t, y, p, sq):
+            return y[0]
+
+        @b.jit(inline="always")
+        def init(p, y):
+            y[0] = 0.0
+
+        @b.jit(inline="always")
+        def scales(p, out):
+            out[0] = 1.0
+
+        return SystemKernels(drive, dynamics, position, velocity, init, scales)
+'''
+
+
+@pytest.mark.parametrize("case, drive, dynamics, says", [
+    # its one state is slot 0; the law's z is slot 1: the write was overwritten by (or
+    # overwrote) the law's rate, inside the vector, without a word (found by review)
+    ("into-the-law", "y[0], 0.0, 0.0", "            dy[1] = 0.5 * y[0]",
+     "badsys_into_the_law:Mass: dynamics writes slot 1 of the state vector, outside its 1 "
+     "states (slots 0 to 0); the friction law's states start at b.z0 = 1: check state_names "
+     "and n_tail (at badsys_into_the_law.py line 17)"),
+    ("drive-returns-two", "y[0], 0.0", "",
+     "badsys_drive_returns_two:Mass: drive must return (u, fext, hold), three numbers, got a "
+     "tuple of 2 (at badsys_drive_returns_two.py line 13)"),
+], ids=["into-the-law", "drive-returns-two"])
+def test_a_brought_systems_bad_kernels_are_one_line(case, drive, dynamics, says, tmp_path,
+                                                    monkeypatch):
+    """A system brought by import path is probed like a law (docs/MODELS.md rule 8): its
+    init and dynamics write only its own slots, and drive returns three numbers."""
+    name = f"badsys_{case.replace('-', '_')}"
+    source = _SYSTEM.format(drive=drive, dynamics=dynamics or "            pass")
+    (tmp_path / f"{name}.py").write_text(textwrap.dedent(source))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = {"system": f"{name}:Mass", "friction": "lugre", "dither": "none",
+            "outputs": ["v_mean"], "time": {"t_end": 2.0, "t_transient": 1.0}}
+    with pytest.raises(SpecError) as err:
+        load_spec(spec)
+    lines = [ln for ln in str(err.value).splitlines() if ln.strip().startswith("- ")]
+    assert len(lines) == 1 and says in lines[0], str(err.value)
+    sys.modules.pop(name, None)
+
+
+def test_a_first_step_that_never_returns_is_one_line(tmp_path, monkeypatch):
+    """A law whose rates loop forever hung ``plan`` and ``submit`` at the first-step check
+    (found by review, 2026-11-28); the child running it is now killed after
+    $DITHERLAB_MODEL_TIMEOUT_S, and that is one line."""
+    rates = ("            k = 0\n            while k >= 0:\n                k = (k + 1) % 7\n"
+             "            dy[Z] = u\n            return y[Z]")
+    (tmp_path / "endless.py").write_text(textwrap.dedent(_law(rates=rates)))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setenv("DITHERLAB_MODEL_TIMEOUT_S", "4")
+    spec = {"friction": "endless:X", "dither": "none", "outputs": ["v_mean"],
+            "time": {"t_end": 2.0, "t_transient": 1.0}}
+    with pytest.raises(SpecError, match=r"- friction 'endless:X' on system 'slider': no "
+                       r"result after 4 s -- an endless loop in its kernels\? "
+                       r"\(DITHERLAB_MODEL_TIMEOUT_S sets how long to wait\)"):
+        load_spec(spec)
+    monkeypatch.setenv("DITHERLAB_MODEL_TIMEOUT_S", "soon")
+    with pytest.raises(SpecError, match="DITHERLAB_MODEL_TIMEOUT_S='soon': expected a "
+                       "number of seconds"):
+        load_spec({**spec, "name": "again"})
+    sys.modules.pop("endless", None)
+
+
 def test_a_law_and_a_system_that_share_a_parameter_name_are_refused(tmp_path, monkeypatch):
     """Before, one value set both the law's own ``m`` and the servo's mass ``m`` (one slot of
     p, one spec key), and the law's range was never checked."""

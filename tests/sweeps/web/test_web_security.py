@@ -290,3 +290,18 @@ def test_the_one_cache_keeps_the_most_recent_entries_within_its_weight():
     assert "x" not in weighed and weighed.get("y") == b"123"
     weighed.put("big", b"0" * 50)   # over the budget alone: kept, being the last
     assert len(weighed) == 1 and weighed.pop("big") == b"0" * 50 and len(weighed) == 0
+
+
+def test_no_page_names_the_servers_folders(server, web_store):
+    """The sweep page's "folder" row and its JSON showed the server's full path of the store
+    (found by review, 2026-11-28), while the view's error sentences left it out: now the
+    folder inside the store."""
+    base, _ = server
+    avg = web_store["avg"]
+    root = str(web_store["root"])
+    for path in ("/", "/api/sweeps", f"/api/sweep/{avg}", f"/sweep/{avg}"):
+        status, _, body = request(base, path)
+        assert status == 200, (path, status)
+        assert root not in body.decode(), path
+    status, _, body = request(base, f"/sweep/{avg}")
+    assert f"<tr><th>folder</th><td><code>{avg}</code></td></tr>" in body.decode()
