@@ -194,6 +194,9 @@ if __name__ == "__main__":
 """
 
 
+# long (CI runs it): three levels and an estimate under the simulator, 41 s of the quick
+# set's 206 s on a fresh clone (its target: 3 minutes, issue 38)
+@pytest.mark.long
 def test_a_refined_gpu_sweep_runs_its_levels_and_its_estimate(tmp_path):
     """A refined sweep on the GPU runs on threads here, level by level, then its error
     estimate's re-runs on CPU threads of their own: the levels' dispatch was handed the
