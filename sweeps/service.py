@@ -41,6 +41,7 @@ from store.catalogue import Catalogue
 from store.lease import HEARTBEAT_S, owner_tag, queued_device
 
 from .run.progress import ATTACH_POLL_S, clock_text, progress_text
+from .version import results_fingerprint
 
 log = logging.getLogger("ditherlab")
 
@@ -52,19 +53,18 @@ SERVED = {"cpu": ("cpu",), "cuda": ("cpu", "cuda")}
 # --- submit --detach -------------------------------------------------------------------
 
 def enqueue(plan, store_root) -> dict:
-    """Record ``plan`` as a queued sweep (spec saved in its folder); returns the row.
-
-    A sweep that is done or running (live) is left as it is: the row says so; a done one
-    whose cube is unusable (sweeps.run.outcome.unusable) is queued again.
-    """
+    """Record ``plan`` as a queued sweep (spec saved in its folder); returns the row. The
+    row names the engine of its id (readers judge it by that, not by loading the spec: a
+    brought model was probed in a child on every `status` and web refresh). A sweep that is
+    done or running (live) is left as it is: the row says so; a done one whose cube is
+    unusable (sweeps.run.outcome.unusable) is queued again."""
     store.layout.check_store(store_root, write=True)   # read-only, a file: one line, now
-    sweep = store.SweepDir(store_root, plan.sweep_id)
-    catalogue = Catalogue(store_root)
+    sweep, catalogue = store.SweepDir(store_root, plan.sweep_id), Catalogue(store_root)
     sweep.root.mkdir(parents=True, exist_ok=True)
     spec_json = plan.spec.to_json()
     sweep.write_spec(spec_json)
     catalogue.register(plan.sweep_id, plan.spec.name, spec_json, plan.n_points,
-                       len(plan.blocks), sweep.root)
+                       len(plan.blocks), sweep.root, results_fingerprint())
     row = catalogue.enqueue(plan.sweep_id)
     from .run.outcome import unusable   # (here: `status` imports this module, no numerics)
     if row["state"] == "done" and (why := unusable(plan, sweep)):   # rebuild it

@@ -12,6 +12,7 @@ import jinja2
 import tornado.web
 
 from tornado.httputil import responses
+from tornado.ioloop import IOLoop
 from tornado.web import HTTPError
 
 from .errors import SENTENCES, status_of
@@ -21,6 +22,11 @@ HERE = Path(__file__).parent
 TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE / "templates"),
                                autoescape=True, undefined=jinja2.StrictUndefined)
 
+
+
+def in_executor(fn, *args):
+    """``fn(*args)`` on the loop's thread pool, awaited: blocking work off the event loop."""
+    return IOLoop.current().run_in_executor(None, fn, *args)
 
 class Base(tornado.web.RequestHandler):
     SUPPORTED_METHODS = ("GET", "HEAD")
@@ -85,8 +91,10 @@ class Base(tornado.web.RequestHandler):
         self.set_header("Content-Type", "application/json")
         self.finish(json.dumps(data, allow_nan=False, default=str))
 
-    def sweep_or_404(self, sweep_id: str) -> dict:
-        row = self.ctx.live.find(sweep_id)
+    async def sweep_or_404(self, sweep_id: str) -> dict:
+        # off the event loop: a catalogue read may take long (before, on the loop, it stalled
+        # every request while a queued brought model's spec was loaded and probed)
+        row = await in_executor(self.ctx.live.find, sweep_id)
         if row is None:
             raise HTTPError(404, f"no sweep {sweep_id} in this store")
         return row

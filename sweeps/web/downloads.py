@@ -8,8 +8,7 @@ import asyncio
 
 from tornado.web import HTTPError
 
-from .base import Base
-from .pages import in_executor
+from .base import Base, in_executor
 from .renders import MEDIA
 
 MAX_CELLS = 2_000_000
@@ -28,7 +27,7 @@ def _snapshot(ctx, sweep_id: str):
 
 class CubeFile(Base):
     async def get(self, sweep_id):
-        self.sweep_or_404(sweep_id)
+        await self.sweep_or_404(sweep_id)
         snap = await in_executor(_snapshot, self.ctx, sweep_id)
         self.set_header("Content-Type", "application/x-netcdf")
         self.set_header("Content-Disposition", f'attachment; filename="{sweep_id}.nc"')
@@ -51,7 +50,7 @@ def _query(ctx, sweep_id: str, var: str | None, sel: dict, fmt: str) -> bytes:
 
 class Query(Base):
     async def get(self, sweep_id, fmt):
-        self.sweep_or_404(sweep_id)
+        await self.sweep_or_404(sweep_id)
         sel = self.selection()
         var = self.get_query_argument("var", "") or None
         data = await in_executor(_query, self.ctx, sweep_id, var, sel, fmt)
@@ -63,7 +62,7 @@ class Query(Base):
 
 class MapImage(Base):
     async def get(self, sweep_id, kind, fmt):
-        self.sweep_or_404(sweep_id)
+        await self.sweep_or_404(sweep_id)
         sel = self.selection()
         pick = self.get_query_argument("pick", "")
         if pick and (not pick.isdigit() or not 1 <= int(pick) <= 50):

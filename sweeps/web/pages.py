@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import json
 
-from tornado.ioloop import IOLoop
 from tornado.web import HTTPError
 
 from store.cube import AXES
 
-from .base import Base
+from .base import Base, in_executor
 from .sweep_view import sweep_view
 
 SORTS = ("created", "name", "state", "done", "path", "finished", "sweep_id")
@@ -19,10 +18,6 @@ SORT_KEYS = {
     "done": lambda r: r["done_points"] / max(r["n_points"], 1),
     "finished": lambda r: r["finished"] or "", "sweep_id": lambda r: r["sweep_id"],
 }
-
-
-def in_executor(fn, *args):
-    return IOLoop.current().run_in_executor(None, fn, *args)
 
 
 class Catalogue(Base):
@@ -86,14 +81,14 @@ class ApiSweeps(Base):
 
 class ApiSweep(Base):
     async def get(self, sweep_id):
-        self.sweep_or_404(sweep_id)
+        await self.sweep_or_404(sweep_id)
         view = await in_executor(sweep_view, self.ctx, sweep_id, {})
         self.json(view["detail"])
 
 
 class SweepPage(Base):
     async def get(self, sweep_id):
-        self.sweep_or_404(sweep_id)
+        await self.sweep_or_404(sweep_id)
         sel = self.selection()
         pick = self.get_query_argument("pick", "5")
         if not pick.isdigit() or not 1 <= int(pick) <= 50:

@@ -52,6 +52,27 @@ def test_help_and_status_import_no_numerics(tmp_path):
     assert out.stdout.strip().splitlines()[-1] == "[]"
 
 
+def test_status_of_a_store_with_a_queued_sweep_imports_no_numerics(tmp_path):
+    """A sweep queued by `submit --detach` was registered without its engine's fingerprint,
+    so every `status` (and every refresh of the web view, on its event loop) loaded its spec
+    again to judge it stale, a brought model probed in a child: 1.9 s for one queued sweep
+    (found by review, 2026-11-28). The row now names its engine."""
+    from sweeps.planning.plan import make_plan
+    from sweeps.service import enqueue
+    from sweeps.version import results_fingerprint
+
+    root = tmp_path / "s"
+    row = enqueue(make_plan(sweeps.load_spec(AVERAGED)), root)
+    assert row["state"] == "queued" and row["engine_fingerprint"] == results_fingerprint()
+    code = (f"import sys; from sweeps.cli import main\n"
+            f"assert main(['status', '--store', {str(root)!r}]) == 0\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert "queued" in out.stdout and out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+
+
 def test_version_flag():
     out = run_cli("--version")
     assert out.returncode == 0 and out.stdout.startswith(f"ditherlab {sweeps.__version__}")

@@ -305,3 +305,32 @@ def test_no_page_names_the_servers_folders(server, web_store):
         assert root not in body.decode(), path
     status, _, body = request(base, f"/sweep/{avg}")
     assert f"<tr><th>folder</th><td><code>{avg}</code></td></tr>" in body.decode()
+
+
+def test_catalogue_reads_run_off_the_event_loop(web_store, serve_ctx):
+    """A sweep's pages looked it up in the catalogue on the event loop: a read that takes
+    long (a queued sweep's spec loaded, a brought model probed in a child: seconds) stalled
+    every other request meanwhile (found by review, 2026-11-28)."""
+    import asyncio
+
+    from sweeps.web.app import ServerState
+
+    ctx = ServerState(web_store["root"])
+    find, calls, on_loop = ctx.live.find, [], []
+
+    def spy(sweep_id):
+        calls.append(sweep_id)
+        try:
+            asyncio.get_running_loop()
+            on_loop.append(sweep_id)
+        except RuntimeError:   # (a pool thread runs no loop)
+            pass
+        return find(sweep_id)
+
+    ctx.live.find = spy
+    base = serve_ctx(ctx)
+    avg = web_store["avg"]
+    for path in (f"/sweep/{avg}", f"/api/sweep/{avg}", f"/sweep/{avg}/query.csv?var=F_eff",
+                 "/sweep/0123456789ab"):
+        request(base, path)
+    assert len(calls) == 4 and on_loop == []
