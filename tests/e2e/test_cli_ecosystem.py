@@ -30,6 +30,18 @@ def run_cli(*args, cwd=None) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, timeout=300)
 
 
+def _status_in_a_child(*argv) -> tuple[str, str]:
+    """``ditherlab *argv`` (exit 0) in a fresh process: what it printed, and the heavy
+    packages it imported (``"[]"``: none)."""
+    code = (f"import sys; from sweeps.cli import main\n"
+            f"assert main({list(argv)!r}) == 0\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    return out.stdout, out.stdout.strip().splitlines()[-1]
+
+
 @pytest.fixture(scope="module")
 def avg_store(tmp_path_factory):
     root = tmp_path_factory.mktemp("eco") / "store"
@@ -64,13 +76,8 @@ def test_status_of_a_store_with_a_queued_sweep_imports_no_numerics(tmp_path):
     root = tmp_path / "s"
     row = enqueue(make_plan(sweeps.load_spec(AVERAGED)), root)
     assert row["state"] == "queued" and row["engine_fingerprint"] == results_fingerprint()
-    code = (f"import sys; from sweeps.cli import main\n"
-            f"assert main(['status', '--store', {str(root)!r}]) == 0\n"
-            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert "queued" in out.stdout and out.stdout.strip().splitlines()[-1] == "[]", out.stdout
+    said, heavy = _status_in_a_child("status", "--store", str(root))
+    assert "queued" in said and heavy == "[]", said
 
 
 def test_version_flag():
@@ -168,10 +175,5 @@ def test_run_sweep_takes_a_spec_and_an_existing_client(tmp_path):
 def test_status_of_one_sweep_imports_no_numerics(avg_store):
     """`status SWEEP` reads the cube's attributes with h5py alone (0.4 s, against 1.9 s)."""
     key = sweeps.load_spec(AVERAGED).sweep_id   # the name may be shared by now (see above)
-    code = (f"import sys; from sweeps.cli import main\n"
-            f"assert main(['status', {key!r}, '--store', {str(avg_store)!r}]) == 0\n"
-            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         timeout=120)
-    assert out.returncode == 0, out.stderr
-    assert "state: done" in out.stdout and out.stdout.strip().splitlines()[-1] == "[]"
+    said, heavy = _status_in_a_child("status", key, "--store", str(avg_store))
+    assert "state: done" in said and heavy == "[]"
