@@ -132,6 +132,8 @@ def _probe_system(scene, sysm, b, n_modes: int, p) -> None:
         where = sk.dynamics
         sk.dynamics(0.0, y, p, 1.0, drive[0], drive[1], 0.1, dy)
         strays = _strays(dy, *own)
+    if strays is None and sk.outputs is not None:
+        _probe_system_outputs(scene, sk.outputs, y, p)
     if strays is not None:
         tail = (f" and its {b.m0 - b.tail0} tail states (slots {b.tail0} to {b.m0 - 1})"
                 if b.m0 > b.tail0 else "")
@@ -140,6 +142,38 @@ def _probe_system(scene, sysm, b, n_modes: int, p) -> None:
                          f"vector, outside its {b.z0} states{slots}{tail}; the friction "
                          f"law's states start at b.z0 = {b.z0}: check state_names and "
                          f"n_tail{_def_at(where)}")
+
+
+def _probe_system_outputs(scene, so, y, p) -> None:
+    """A brought system's own observables (engine.contract.SystemOutputs): its hooks write
+    only the ``size`` accumulator slots it declares, and ``finish`` a value for each of its
+    outputs and nothing after them. In the kernel ``o`` and ``out`` are views into longer
+    arrays: a write past them went into the engine's alpha_hist columns or past the
+    accumulator's end, without a bounds check."""
+    import numpy as np
+
+    n_slots, names = int(so.size), tuple(so.names)
+    o = np.full(n_slots + 8, SENTINEL)
+    hooks = [(so.start, (0.0, y, p, 1.0, o)), (so.observe, (0.0, y, 0.5, y, y, p, 1.0, o))]
+    if so.stop is not None:
+        hooks.append((so.stop, (0.5, y, p, True, o)))
+    for hook, args in hooks:
+        hook(*args)
+        strays = _strays(o, (0, n_slots))
+        if strays is not None:
+            raise ModelError(f"{scene.system}: {_name(hook)} writes accumulator slot "
+                             f"{strays}, past its {n_slots} (SystemOutputs size)"
+                             f"{_def_at(hook)}")
+    out = np.full(len(names) + 8, SENTINEL)
+    so.finish(1.0, y, p, o, out, 1.0)
+    strays = _strays(out, (0, len(names)))
+    if strays is not None:
+        raise ModelError(f"{scene.system}: finish writes out[{strays}], past its "
+                         f"{len(names)} outputs ({', '.join(names)}){_def_at(so.finish)}")
+    unset = [name for name, v in zip(names, out) if v == SENTINEL]
+    if unset:
+        raise ModelError(f"{scene.system}: finish gives no value for its output "
+                         f"{unset[0]!r}{_def_at(so.finish)}")
 
 
 def _name(fn) -> str:

@@ -177,7 +177,7 @@ def test_a_write_past_the_laws_states_into_another_slot_is_refused(tmp_path, mon
 
 
 _SYSTEM = '''
-from engine.contract import MechanicalSystem, Param, SystemKernels
+from engine.contract import MechanicalSystem, Param, SystemKernels, SystemOutputs
 
 class Mass(MechanicalSystem):
     name = "mass"
@@ -213,31 +213,62 @@ class Mass(MechanicalSystem):
         def scales(p, out):
             out[0] = 1.0
 
-        return SystemKernels(drive, dynamics, position, velocity, init, scales)
+        @b.jit(inline="always")
+        def start(t, y, p, sq, o):
+{start}
+
+        @b.jit(inline="always")
+        def observe(t0, y0, t1, y1, ymid, p, sq, o):
+            o[0] = max(o[0], y1[0])
+
+        @b.jit(inline="always")
+        def finish(t, y, p, o, out, span):
+{finish}
+
+        so = SystemOutputs(("v_peak",), 1, start, observe, finish)
+        return SystemKernels(drive, dynamics, position, velocity, init, scales,
+                             so if "v_peak" in b.scene.outputs else None)
+
+    outputs = {{"v_peak": ("the largest velocity", "1")}}
 '''
+_SYSTEM_OK = {"drive": "y[0], 0.0, 0.0", "dynamics": "            pass",
+              "start": "            o[0] = y[0]", "finish": "            out[0] = o[0]"}
 
 
-@pytest.mark.parametrize("case, drive, dynamics, says", [
+_BAD_SYSTEMS = [
     # its one state is slot 0; the law's z is slot 1: the write was overwritten by (or
     # overwrote) the law's rate, inside the vector, without a word (found by review)
-    ("into-the-law", "y[0], 0.0, 0.0", "            dy[1] = 0.5 * y[0]",
+    ("into-the-law", {"dynamics": "            dy[1] = 0.5 * y[0]"},
      "badsys_into_the_law:Mass: dynamics writes slot 1 of the state vector, outside its 1 "
      "states (slots 0 to 0); the friction law's states start at b.z0 = 1: check state_names "
      "and n_tail (at badsys_into_the_law.py line 17)"),
-    ("drive-returns-two", "y[0], 0.0", "",
+    ("drive-returns-two", {"drive": "y[0], 0.0"},
      "badsys_drive_returns_two:Mass: drive must return (u, fext, hold), three numbers, got a "
      "tuple of 2 (at badsys_drive_returns_two.py line 13)"),
-], ids=["into-the-law", "drive-returns-two"])
-def test_a_brought_systems_bad_kernels_are_one_line(case, drive, dynamics, says, tmp_path,
-                                                    monkeypatch):
+    # in the kernel `out` is a view of the point's row: out[1] was the next column (another
+    # output or an alpha_hist share), `o[1]` past the accumulator's end, unchecked
+    ("finish-past-its-outputs", {"finish": "            out[0] = o[0]\n            out[1] = 1.0"},
+     "badsys_finish_past_its_outputs:Mass: finish writes out[1], past its 1 outputs (v_peak) "
+     "(at badsys_finish_past_its_outputs.py line 46)"),
+    ("start-past-its-slots", {"start": "            o[0] = y[0]\n            o[1] = 0.0"},
+     "badsys_start_past_its_slots:Mass: start writes accumulator slot 1, past its 1 "
+     "(SystemOutputs size) (at badsys_start_past_its_slots.py line 38)"),
+    ("finish-leaves-an-output", {"finish": "            pass"},
+     "badsys_finish_leaves_an_output:Mass: finish gives no value for its output 'v_peak'"),
+]
+
+
+@pytest.mark.parametrize("case, change, says", _BAD_SYSTEMS, ids=[c[0] for c in _BAD_SYSTEMS])
+def test_a_brought_systems_bad_kernels_are_one_line(case, change, says, tmp_path, monkeypatch):
     """A system brought by import path is probed like a law (docs/MODELS.md rule 8): its
-    init and dynamics write only its own slots, and drive returns three numbers."""
+    init and dynamics write only its own slots, drive returns three numbers, and its own
+    observables' hooks write only their slots and outputs."""
     name = f"badsys_{case.replace('-', '_')}"
-    source = _SYSTEM.format(drive=drive, dynamics=dynamics or "            pass")
+    source = _SYSTEM.format(**{**_SYSTEM_OK, **change})
     (tmp_path / f"{name}.py").write_text(textwrap.dedent(source))
     monkeypatch.syspath_prepend(str(tmp_path))
     spec = {"system": f"{name}:Mass", "friction": "lugre", "dither": "none",
-            "outputs": ["v_mean"], "time": {"t_end": 2.0, "t_transient": 1.0}}
+            "outputs": ["v_mean", "v_peak"], "time": {"t_end": 2.0, "t_transient": 1.0}}
     with pytest.raises(SpecError) as err:
         load_spec(spec)
     lines = [ln for ln in str(err.value).splitlines() if ln.strip().startswith("- ")]
