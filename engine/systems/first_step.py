@@ -19,7 +19,7 @@ def probe(scene, p) -> None:
     at the first step. Used for models a user brings, before anything is written."""
     import numpy as np
 
-    _probe_parts(scene, p)
+    scales = _probe_parts(scene, p)
     try:
         system = make_system(scene)
         n, extra = system.n, 8
@@ -51,27 +51,37 @@ def probe(scene, p) -> None:
     if bad:
         raise ModelError(f"{who}: {bad[0]} is NaN or infinite at the first step (t = 0, "
                          "the initial state): check its equations and parameters")
-
-
-def _probe_parts(scene, p) -> None:
-    """A brought model's kernels compiled and called one by one (so that numba's complaint
-    names the user's function, not the engine code it is inlined into), their writes checked
-    against the model's own slots of the state vector, and the types of what they return
-    checked against the contract."""
-    law, sysm, b = build_context(scene)
-    n_modes = int(law.n_modes(b.size))   # (a whole number: build_context checked it)
-    try:
-        if registry.is_import_path(scene.friction):
-            _probe_law(scene, law, b, n_modes, p)
-        if registry.is_import_path(scene.system):
-            _probe_system(scene, sysm, b, n_modes, p)
+    try:   # last: a missing rate or state says more than the scale it lacks too
+        for args in scales:
+            _probe_scales(*args, p)
     except ModelError:
         raise
     except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
         raise ModelError(compile_line(scene, exc)) from None
 
 
-def _probe_law(scene, law, b, n_modes: int, p) -> None:
+def _probe_parts(scene, p) -> list:
+    """A brought model's kernels compiled and called one by one (so that numba's complaint
+    names the user's function, not the engine code it is inlined into), their writes checked
+    against the model's own slots of the state vector, and the types of what they return
+    checked against the contract. Returns the arguments of the scales checks, made last
+    (:func:`_probe_scales`)."""
+    law, sysm, b = build_context(scene)
+    n_modes = int(law.n_modes(b.size))   # (a whole number: build_context checked it)
+    scales = []
+    try:
+        if registry.is_import_path(scene.friction):
+            scales.append(_probe_law(scene, law, b, n_modes, p))
+        if registry.is_import_path(scene.system):
+            scales.append(_probe_system(scene, sysm, b, n_modes, p))
+        return scales
+    except ModelError:
+        raise
+    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        raise ModelError(compile_line(scene, exc)) from None
+
+
+def _probe_law(scene, law, b, n_modes: int, p) -> tuple:
     import numpy as np
 
     n = b.m0 + n_modes + 8
@@ -105,9 +115,10 @@ def _probe_law(scene, law, b, n_modes: int, p) -> None:
         lk.switches(0.1, y, 0.0, p, g)
     if lk.update_modes is not None:
         lk.update_modes(0.1, y, 0.0, p, -1)
+    return scene.friction, lk.scales, n, b.n_err, ((b.z0, b.z0 + b.n_law),)
 
 
-def _probe_system(scene, sysm, b, n_modes: int, p) -> None:
+def _probe_system(scene, sysm, b, n_modes: int, p) -> tuple:
     """A brought system's init and dynamics write only its own slots: its states (from 0)
     and its tail (quadratures, from b.tail0). Before, a write into the law's first state
     stayed inside the vector and was overwritten or added silently: wrong numbers."""
@@ -142,6 +153,34 @@ def _probe_system(scene, sysm, b, n_modes: int, p) -> None:
                          f"vector, outside its {b.z0} states{slots}{tail}; the friction "
                          f"law's states start at b.z0 = {b.z0}: check state_names and "
                          f"n_tail{_def_at(where)}")
+    return scene.system, sk.scales, n, b.n_err, own
+
+
+def _probe_scales(ref: str, scales, n: int, n_err: int, own: tuple, p) -> None:
+    """A model's ``scales(p, out)`` writes only its own slots, and a finite scale for each of
+    them under error control (the first ``n_err``). In the kernel ``out`` is the atol,
+    filled with ``atol`` and scaled by atol after ``scales``: a slot left unwritten ran at
+    atol squared (``atol_units = "natural"``; measured: 184 steps a point, not 173), a
+    tolerance nobody asked for, without a word."""
+    import numpy as np
+
+    out = np.full(n, SENTINEL)
+    scales(p, out)
+    strays = _strays(out, *own)
+    if strays is not None:
+        raise ModelError(f"{ref}: scales writes slot {strays}, outside its own "
+                         f"{_slots_text(own)}{_def_at(scales)}")
+    for lo, hi in own:
+        for i in range(lo, min(hi, n_err)):
+            if out[i] == SENTINEL or not np.isfinite(out[i]):
+                what = "no scale" if out[i] == SENTINEL else f"the scale {out[i]!r}"
+                raise ModelError(f"{ref}: scales gives {what} for slot {i}, a state under "
+                                 f"error control: write a finite natural scale for each of "
+                                 f"its {_slots_text(own)}{_def_at(scales)}")
+
+
+def _slots_text(own) -> str:
+    return " and ".join(f"slots {lo} to {hi - 1}" for lo, hi in own if hi > lo) or "no slots"
 
 
 def _probe_system_outputs(scene, so, y, p) -> None:

@@ -155,6 +155,11 @@ BAD.update({
                     "phases must be 'band' or 'alpha' (docs/MODELS.md rule 6), got 'Band'"),
     "lo-above-hi": (_law().replace("lo=0.0, hi=2.0", "lo=2.0, hi=0.0"), "X", {},
                     "parameter 'a': lo and hi must be numbers with lo <= hi"),
+    # with atol_units = "natural" an unwritten scale left that state at atol squared (the
+    # atol is filled with atol, then scaled by it), a tolerance nobody asked for
+    "scales-writes-nothing": (_law().replace("out[Z] = 1.0", "pass"), "X", {},
+                              "scales gives no scale for slot 2, a state under error control: "
+                              "write a finite natural scale for each of its slots 2 to 2"),
 })
 
 
@@ -211,7 +216,7 @@ class Mass(MechanicalSystem):
 
         @b.jit(inline="always")
         def scales(p, out):
-            out[0] = 1.0
+{scales}
 
         @b.jit(inline="always")
         def start(t, y, p, sq, o):
@@ -232,7 +237,8 @@ class Mass(MechanicalSystem):
     outputs = {{"v_peak": ("the largest velocity", "1")}}
 '''
 _SYSTEM_OK = {"drive": "y[0], 0.0, 0.0", "dynamics": "            pass",
-              "start": "            o[0] = y[0]", "finish": "            out[0] = o[0]"}
+              "start": "            o[0] = y[0]", "finish": "            out[0] = o[0]",
+              "scales": "            out[0] = 1.0"}
 
 
 _BAD_SYSTEMS = [
@@ -255,6 +261,8 @@ _BAD_SYSTEMS = [
      "(SystemOutputs size) (at badsys_start_past_its_slots.py line 38)"),
     ("finish-leaves-an-output", {"finish": "            pass"},
      "badsys_finish_leaves_an_output:Mass: finish gives no value for its output 'v_peak'"),
+    ("scales-into-the-law", {"scales": "            out[0] = 1.0\n            out[1] = 1.0"},
+     "badsys_scales_into_the_law:Mass: scales writes slot 1, outside its own slots 0 to 0"),
 ]
 
 
