@@ -159,8 +159,8 @@ def add_phase(obs, t0, t1, a, long_stick, hist):
     if a >= 1.0:
         obs[O_T_NEAR] += h
     run_bookkeeping(obs, t0, ph == STICK, long_stick)
-    if hist:
-        obs[O_HIST + min(int(a * N_HIST), N_HIST - 1)] += h
+    if hist:   # (a brought law's alpha outside [0, 1] or NaN: an end bin, not another slot)
+        obs[O_HIST + min(int(a * N_HIST) if a > 0.0 else 0, N_HIST - 1)] += h
 
 
 @njit(error_model="numpy")

@@ -111,6 +111,9 @@ def _probe_law(scene, law, b, n_modes: int, p) -> tuple:
     if not (isinstance(Fa, tuple) and len(Fa) == 2 and all(isinstance(v, float) for v in Fa)):
         raise ModelError(f"{scene.friction}: force must return (F, alpha), two numbers, "
                          f"got {type(Fa).__name__}{_def_at(where)}")
+    if not 0.0 <= Fa[1] <= 1.0:   # (the phase observables bin it: outside, other slots)
+        raise ModelError(f"{scene.friction}: force gives alpha = {Fa[1]!r} at the first step; "
+                         f"alpha is the phase, in [0, 1] (0 stick, 1 slip){_def_at(where)}")
     if lk.switches is not None and lk.n_switches:
         lk.switches(0.1, y, 0.0, p, g)
     if lk.update_modes is not None:

@@ -157,6 +157,10 @@ BAD.update({
                     "parameter 'a': lo and hi must be numbers with lo <= hi"),
     # with atol_units = "natural" an unwritten scale left that state at atol squared (the
     # atol is filled with atol, then scaled by it), a tolerance nobody asked for
+    # alpha_hist bins alpha: a negative alpha indexed the accumulators before the histogram
+    "alpha-outside-0-1": (_law().replace("return p[ia] * y[Z], 1.0", "return p[ia] * y[Z], -0.5"),
+                          "X", {}, "force gives alpha = -0.5 at the first step; alpha is the "
+                          "phase, in [0, 1] (0 stick, 1 slip)"),
     "scales-writes-nothing": (_law().replace("out[Z] = 1.0", "pass"), "X", {},
                               "scales gives no scale for slot 2, a state under error control: "
                               "write a finite natural scale for each of its slots 2 to 2"),
