@@ -82,6 +82,8 @@ def _probe_parts(scene, p) -> list:
 
 
 def _probe_law(scene, law, b, n_modes: int, p) -> tuple:
+    """A brought law's init and rates write only its states (init: and its modes), rates
+    returns a number, force two with alpha in [0, 1]; returns its scales check's arguments."""
     import numpy as np
 
     n = b.m0 + n_modes + 8
