@@ -118,8 +118,16 @@ def _probe_law(scene, law, b, n_modes: int, p) -> tuple:
                          f"alpha is the phase, in [0, 1] (0 stick, 1 slip){_def_at(where)}")
     if lk.switches is not None and lk.n_switches:
         lk.switches(0.1, y, 0.0, p, g)
-    if lk.update_modes is not None:
+    if lk.update_modes is not None:   # it sets the modes only (docs/MODELS.md rule 5)
+        where, before = lk.update_modes, y.copy()
         lk.update_modes(0.1, y, 0.0, p, -1)
+        moved = [int(i) for i in np.flatnonzero(y != before)
+                 if not b.m0 <= i < b.m0 + n_modes and not np.isnan(before[i])]
+        if moved:
+            raise ModelError(f"{scene.friction}: update_modes writes slot {moved[0]} of the "
+                             f"state vector, outside its {n_modes} modes (slots {b.m0} to "
+                             f"{b.m0 + n_modes - 1}): it sets the modes y[m0 + i] only"
+                             f"{_def_at(where)}")
     return scene.friction, lk.scales, n, b.n_err, ((b.z0, b.z0 + b.n_law),)
 
 

@@ -161,6 +161,17 @@ BAD.update({
     "alpha-outside-0-1": (_law().replace("return p[ia] * y[Z], 1.0", "return p[ia] * y[Z], -0.5"),
                           "X", {}, "force gives alpha = -0.5 at the first step; alpha is the "
                           "phase, in [0, 1] (0 stick, 1 slip)"),
+    # a mode update that also moved a state at every accepted step, unnoticed
+    "update-modes-writes-a-state": (
+        _law().replace("    def build(self, b):", "    def n_modes(self, size):\n        return 1\n\n"
+                       "    def build(self, b):")
+        .replace('Z, ia = b.z0, b.ix["a"]', 'Z, M, ia = b.z0, b.m0, b.ix["a"]')
+        .replace("        return LawKernels(rates, force, 0, None, init, scales)",
+                 "        @b.jit(inline=\"always\")\n        def modes(u, y, hold, p, landed):\n"
+                 "            y[M] = 1.0\n            y[Z] = 0.5\n            return True\n\n"
+                 "        return LawKernels(rates, force, 0, None, init, scales, modes)"),
+        "X", {}, "update_modes writes slot 2 of the state vector, outside its 1 modes (slots 3 "
+        "to 3): it sets the modes y[m0 + i] only"),
     "scales-writes-nothing": (_law().replace("out[Z] = 1.0", "pass"), "X", {},
                               "scales gives no scale for slot 2, a state under error control: "
                               "write a finite natural scale for each of its slots 2 to 2"),
