@@ -23,10 +23,10 @@ TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE / "templates"
                                autoescape=True, undefined=jinja2.StrictUndefined)
 
 
-
 def in_executor(fn, *args):
     """``fn(*args)`` on the loop's thread pool, awaited: blocking work off the event loop."""
     return IOLoop.current().run_in_executor(None, fn, *args)
+
 
 class Base(tornado.web.RequestHandler):
     SUPPORTED_METHODS = ("GET", "HEAD")

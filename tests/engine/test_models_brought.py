@@ -155,8 +155,6 @@ BAD.update({
                     "phases must be 'band' or 'alpha' (docs/MODELS.md rule 6), got 'Band'"),
     "lo-above-hi": (_law().replace("lo=0.0, hi=2.0", "lo=2.0, hi=0.0"), "X", {},
                     "parameter 'a': lo and hi must be numbers with lo <= hi"),
-    # with atol_units = "natural" an unwritten scale left that state at atol squared (the
-    # atol is filled with atol, then scaled by it), a tolerance nobody asked for
     # alpha_hist bins alpha: a negative alpha indexed the accumulators before the histogram
     "alpha-outside-0-1": (_law().replace("return p[ia] * y[Z], 1.0", "return p[ia] * y[Z], -0.5"),
                           "X", {}, "force gives alpha = -0.5 at the first step; alpha is the "
@@ -172,6 +170,8 @@ BAD.update({
                  "        return LawKernels(rates, force, 0, None, init, scales, modes)"),
         "X", {}, "update_modes writes slot 2 of the state vector, outside its 1 modes (slots 3 "
         "to 3): it sets the modes y[m0 + i] only"),
+    # with atol_units = "natural" an unwritten scale left that state at atol squared (the
+    # atol is filled with atol, then scaled by it), a tolerance nobody asked for
     "scales-writes-nothing": (_law().replace("out[Z] = 1.0", "pass"), "X", {},
                               "scales gives no scale for slot 2, a state under error control: "
                               "write a finite natural scale for each of its slots 2 to 2"),
