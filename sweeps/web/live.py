@@ -26,6 +26,16 @@ def inside_store(root: Path, text: str) -> str:
     return text.replace(f"{root}/", "").replace(str(root), "the store")
 
 
+def row_inside_store(root: Path, row: dict) -> dict:
+    """A sweep's summary or detail (sweeps.overview) as the web shows it: ``row`` with its
+    texts that may name a path (folder, message, warnings, stale note) inside the store."""
+    for key in ("folder", "message", "stale_note"):
+        if isinstance(row.get(key), str):
+            row[key] = inside_store(root, row[key])
+    row["warnings"] = [inside_store(root, w) for w in row.get("warnings", [])]
+    return row
+
+
 class LiveCatalogue:
     def __init__(self, root: Path, refresh_s: float = REFRESH_S):
         self.root, self.refresh_s = Path(root), refresh_s
@@ -52,11 +62,7 @@ class LiveCatalogue:
         summary = store_summary(self.root, self._warnings)
         self._files = files
         self._read_at = time.monotonic()
-        for r in summary["sweeps"]:   # (the folder, a message or warning naming a path)
-            r["folder"], r["message"] = (inside_store(self.root, r[k]) for k in
-                                         ("folder", "message"))
-            r["warnings"] = [inside_store(self.root, w) for w in r["warnings"]]
-        fresh = {r["sweep_id"]: r for r in summary["sweeps"]}
+        fresh = {r["sweep_id"]: row_inside_store(self.root, r) for r in summary["sweeps"]}
         changed = [i for i, r in fresh.items()
                    if {k: v for k, v in self._rows.get(i, {}).items() if k != "seq"} != r]
         gone = set(self._rows) - set(fresh)

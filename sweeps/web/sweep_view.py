@@ -108,6 +108,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
     """Everything the sweep page of ``sweep_id`` (looked up in the catalogue) shows."""
     from ..lookup import open_checked
     from ..overview import sweep_detail
+    from .live import row_inside_store
 
     from store.cube_io import CubeError
 
@@ -118,8 +119,7 @@ def sweep_view(ctx, sweep_id: str, sel: dict) -> dict:
             ds = open_checked(sweep_id, cube_path, ctx.cubes.get).ds
         except CubeError as err:   # a torn cube: the page without it, saying how to repair
             cube_error = ctx.shown(str(err))
-    detail = sweep_detail(ctx.root, sweep_id, ds)
-    detail["folder"] = ctx.shown(detail["folder"])   # inside the store, as the errors say
+    detail = row_inside_store(ctx.root, sweep_detail(ctx.root, sweep_id, ds))
     from ..estimates.time_history import recorded
 
     view = {"detail": detail, "toml": spec_toml(detail["spec"]), "plan": ctx.plan(sweep_id,

@@ -334,3 +334,20 @@ def test_catalogue_reads_run_off_the_event_loop(web_store, serve_ctx):
                  "/sweep/0123456789ab"):
         request(base, path)
     assert len(calls) == 4 and on_loop == []
+
+
+def test_a_stale_sweeps_page_names_no_server_folder(web_store, serve_ctx, monkeypatch):
+    """The sweep page's stale note says where the sweep's spec is, to resubmit it: that was
+    the server's full path (`(e.g. /srv/.../store/<id>/spec.json)`), while the page's other
+    paths are inside the store. The page and its JSON now read it inside the store too."""
+    import sweeps.lookup
+    from sweeps.web.app import ServerState
+
+    root, avg = web_store["root"], web_store["avg"]
+    note = f"made by engine x; `ditherlab submit SPEC` (e.g. {root / avg / 'spec.json'})"
+    monkeypatch.setattr(sweeps.lookup, "stale_note", lambda row, ds=None, root=None: note)
+    base = serve_ctx(ServerState(root))
+    for path in (f"/sweep/{avg}", f"/api/sweep/{avg}"):
+        status, _, body = request(base, path)
+        assert status == 200 and str(root) not in body.decode(), path
+        assert f"(e.g. {avg}/spec.json)" in body.decode(), path
