@@ -16,9 +16,9 @@
 
 Order: ``scripts/test`` runs the tests on one pytest-xdist worker per core, a module's tests
 on one worker (``--dist loadscope``), handing out modules in collection order. The costliest
-modules (:data:`COSTLIEST`) and then those with a long test are collected first, so that a
-worker never starts a 6-minute module when the rest of the suite is done (the longest-first
-rule of scheduling).
+modules (:data:`COSTLIEST`; in the quick set :data:`QUICK_COSTLIEST`) and then those with a
+long test are collected first, so that a worker never starts a 6-minute module when the rest
+of the suite is done (the longest-first rule of scheduling).
 """
 from __future__ import annotations
 
@@ -32,17 +32,24 @@ from .guarantee import skip_unless_ci
 
 HERE = pathlib.Path(__file__).parent
 
-# the modules that cost most, costliest first (.ci/run's --durations on a fresh clone, this
-# 2-core machine, cold kernel cache): the promise check 357 s, the gallery's figures 118 s,
-# batch-started workers 76 s, two processes filling one kernel cache 48 s, the README 47 s
-COSTLIEST = ("accuracy/test_promises.py", "e2e/test_gallery_figures.py", "e2e/test_hpc.py",
-             "engine/test_disk_cache.py", "test_readme.py")
+# the modules that cost most, costliest first: in CI (.ci/run's test-cost table on a fresh
+# clone, this 2-core machine, cold kernel cache, 2026-11-28: the promise check 339 s, DOP853
+# comparisons 205 s, wrong models 171 s, the GPU simulator 161 s, the gallery's figures
+# 138 s, a crashing model 110 s), and in the quick set alone (`scripts/test -q`, the same
+# day: brought models 55 s, hard cases 31 s, contact switches 31 s, convergence orders 26 s,
+# web pages 22 s, the batch API 17 s); each module's cost is mostly compiling its scenes
+COSTLIEST = ("accuracy/test_promises.py", "engine/test_engine_vs_scipy.py",
+             "sweeps/gallery/test_wrong_models.py", "engine/test_gpu.py",
+             "e2e/test_gallery_figures.py", "e2e/test_crashing_model.py")
+QUICK_COSTLIEST = ("engine/test_models_brought.py", "hard/test_hard_cases.py",
+                   "engine/test_engine_contact_switches.py", "engine/test_engine_convergence.py",
+                   "sweeps/web/test_web_pages.py", "engine/test_engine_batch_api.py")
 
 
-def _cost_rank(item) -> tuple[int, int]:
+def _cost_rank(item, costliest: tuple[str, ...]) -> tuple[int, int]:
     where = pathlib.Path(str(item.fspath)).relative_to(HERE).as_posix()
-    if where in COSTLIEST:
-        return 0, COSTLIEST.index(where)
+    if where in costliest:
+        return 0, costliest.index(where)
     return 1, 0
 
 
@@ -54,7 +61,8 @@ def pytest_collection_modifyitems(config, items):
             config.hook.pytest_deselected(items=long)
             items[:] = [item for item in items if not item.get_closest_marker("long")]
     long_modules = {item.fspath for item in items if item.get_closest_marker("long")}
-    items.sort(key=lambda item: (*_cost_rank(item), item.fspath not in long_modules))
+    costliest = COSTLIEST if long_modules else QUICK_COSTLIEST
+    items.sort(key=lambda item: (*_cost_rank(item, costliest), item.fspath not in long_modules))
     if "slow" in markexpr:
         return
     for item in items:
