@@ -125,17 +125,21 @@ os._exit(0)   # (the result is out: a crash while tearing down is not the user's
 CRASHES = {"SIGSEGV", "SIGBUS", "SIGILL", "SIGFPE", "SIGABRT"}   # a fault in compiled code
 TIMEOUT_ENV = "DITHERLAB_MODEL_TIMEOUT_S"   # how long :func:`isolated` waits for a result
 TIMEOUT_S = 600.0   # compiling a brought model's kernels takes 10-60 s; its sample points more
+# how long one task of a brought model's points may run (sweeps.workers.task.watched): a
+# block takes seconds, its kernels compiled before (another knob than the first-step check's)
+BLOCK_TIMEOUT_ENV = "DITHERLAB_BLOCK_TIMEOUT_S"
 
 
-def timeout_s() -> float:
-    """``$DITHERLAB_MODEL_TIMEOUT_S`` (seconds, > 0), else :data:`TIMEOUT_S`."""
-    text = os.environ.get(TIMEOUT_ENV, "").strip()
+def timeout_s(env: str = TIMEOUT_ENV, default: float = TIMEOUT_S) -> float:
+    """``$env`` (seconds, > 0; :data:`TIMEOUT_ENV` or :data:`BLOCK_TIMEOUT_ENV`), else
+    ``default``; a bad value is a :class:`ModelError` line."""
+    text = os.environ.get(env, "").strip()
     try:
-        value = float(text) if text else TIMEOUT_S
+        value = float(text) if text else default
     except ValueError:
-        raise ModelError(f"{TIMEOUT_ENV}={text!r}: expected a number of seconds") from None
+        raise ModelError(f"{env}={text!r}: expected a number of seconds") from None
     if not value > 0:
-        raise ModelError(f"{TIMEOUT_ENV}={text!r}: expected a number of seconds above 0")
+        raise ModelError(f"{env}={text!r}: expected a number of seconds above 0")
     return value
 
 

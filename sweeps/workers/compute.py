@@ -34,6 +34,7 @@ class Compute:
         from ..planning.plan import min_task_s
 
         min_task_s()   # a bad $DITHERLAB_MIN_TASK_S: one line (exit 2) before anything runs
+        _block_timeout_s()   # and a bad $DITHERLAB_BLOCK_TIMEOUT_S likewise
         self.workers, self.batch, self.scheduler = workers, batch, scheduler
         self.dashboard = dashboard
         self._given = client
@@ -194,3 +195,16 @@ class Compute:
         """The run is over: every batch job ends (serve waits holding none)."""
         if self._scaler is not None:
             self._scaler.release()
+
+
+def _block_timeout_s() -> float:
+    """``$DITHERLAB_BLOCK_TIMEOUT_S`` (sweeps.workers.task.watched), checked by the submitter:
+    a bad value is refused (exit 2), not a failed block on every worker."""
+    from engine.user_code import BLOCK_TIMEOUT_ENV, TIMEOUT_S, ModelError, timeout_s
+
+    from ..errors import RefusedError
+
+    try:
+        return timeout_s(BLOCK_TIMEOUT_ENV, TIMEOUT_S)
+    except ModelError as exc:
+        raise RefusedError(str(exc)) from None

@@ -62,13 +62,70 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
             _note_block(os.environ[BLOCK_LOG_ENV], block_key(scene, points[a:b], settings))
     index = np.arange(len(points)) if index is None else index
     try:
-        res = run_block(scene, points, p, settings)
+        res = (watched if scene.digests else run_block)(scene, points, p, settings)
     except Exception as exc:  # noqa: BLE001 -- one bad block must not end the sweep
-        return BlockRecord.failed(index, output_shapes(scene.outputs),
-                                  f"{type(exc).__name__}: {exc}",
+        from engine.contract import ModelError   # (a brought model's fault: its own line)
+
+        why = str(exc) if isinstance(exc, ModelError) else f"{type(exc).__name__}: {exc}"
+        return BlockRecord.failed(index, output_shapes(scene.outputs), why,
                                   S.FAILED, fingerprint=_fingerprint())
     return BlockRecord(index, res.status, res.cost_s, res.steps, res.evals, res.outputs,
                        fingerprint=_fingerprint())
+
+
+EXIT_AFTER_S = 5.0   # a worker with a hung model's thread ends this long after its result
+
+
+def watched(scene, points: np.ndarray, p: np.ndarray, settings):
+    """``engine.blocks.run_block`` for a brought model (``scene.digests``), given up after
+    ``$DITHERLAB_BLOCK_TIMEOUT_S`` seconds (default 600: a task is seconds). Compiled
+    code cannot be interrupted, and a model that loops for ever at some points (the spec's
+    first-step check ran another point) kept its worker busy for ever and the sweep's
+    progress still (found by a review; nothing else ended it). It runs in a thread of its
+    own here; past the limit this raises :class:`engine.user_code.ModelError` (the block is
+    FAILED in one warning line, the sweep goes on), and a dask worker ends itself
+    :data:`EXIT_AFTER_S` later, once its result is out, so that its nanny starts a fresh
+    one in place of the core the loop holds."""
+    import threading
+
+    from engine.blocks import run_block
+    from engine.user_code import BLOCK_TIMEOUT_ENV, TIMEOUT_S, ModelError, timeout_s
+
+    limit, box = timeout_s(BLOCK_TIMEOUT_ENV, TIMEOUT_S), {}
+
+    def run() -> None:
+        try:
+            box["result"] = run_block(scene, points, p, settings)
+        except BaseException as exc:  # noqa: BLE001 -- raised again in the task's thread
+            box["error"] = exc
+
+    thread = threading.Thread(target=run, daemon=True, name="ditherlab-model-block")
+    thread.start()
+    thread.join(limit)
+    if thread.is_alive():
+        _end_worker_soon()
+        raise ModelError(f"no result after {limit:g} s -- an endless loop in the model's "
+                         f"kernels at these points? ({BLOCK_TIMEOUT_ENV} sets how long "
+                         f"to wait)")
+    if "error" in box:
+        raise box["error"]
+    return box["result"]
+
+
+def _end_worker_soon() -> None:
+    """In a dask worker (not a submitter computing on threads): exit the process
+    :data:`EXIT_AFTER_S` from now; its nanny starts another."""
+    import threading
+
+    try:
+        from distributed import get_worker
+        get_worker()
+    except (ImportError, ValueError):
+        return
+    log.info("a brought model's block hung: this worker ends in %g s", EXIT_AFTER_S)
+    timer = threading.Timer(EXIT_AFTER_S, os._exit, args=(3,))
+    timer.daemon = True
+    timer.start()
 
 
 @functools.cache

@@ -5,7 +5,9 @@ run only on the workers that matched when they were submitted and a restarted wo
 new address; a small sweep ran in the submitter, which died with a segmentation fault. Now
 the crash costs workers, not the submitter: the block is given up as FAILED in one warning
 line once its tasks killed more workers than dask allows, the other points are kept, the
-error estimate says why it has no number, and a second submit computes only those blocks."""
+error estimate says why it has no number, and a second submit computes only those blocks.
+A brought law that loops for ever at some points is given up the same way, after
+$DITHERLAB_BLOCK_TIMEOUT_S (sweeps.workers.task.watched)."""
 from __future__ import annotations
 
 import os
@@ -94,7 +96,7 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
     crashed = [ln for ln in out.stderr.splitlines() if "worker processes died" in ln]
     assert len(crashed) == 2, out.stderr
     assert all(ln.startswith("ditherlab: warning: block ") and " failed: " in ln
-               and "2 worker processes died" in ln for ln in crashed), out.stderr
+               for ln in crashed), out.stderr
     assert "2 of 3 points failed" in out.stderr
 
     [cube_file] = store.glob("*/cube.nc")
@@ -113,6 +115,45 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
 
     again = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
     assert again.returncode == 1 and "ran 2 blocks" in again.stdout, (again.stdout, again.stderr)
+
+
+LOOPING = LAW.replace("dy[Z + 100000000000] = 1.0", """k = 0.0
+                while k >= 0.0:   # for ever (k stops growing at 2**53)
+                    k += 1.0""")
+
+
+def test_a_law_that_loops_for_ever_fails_its_block_in_one_line_and_keeps_the_rest(tmp_path):
+    """A brought law that never returns at W > 0.05 (the spec's first-step check ran another
+    point). Before, its workers computed for ever and the sweep's progress stood still;
+    now each such block is given up after $DITHERLAB_BLOCK_TIMEOUT_S (3 s here) in one
+    warning line, its worker ends and is started again, and the other points are kept."""
+    (tmp_path / "crashlab.py").write_text(textwrap.dedent(LOOPING))
+    assert "while k >= 0.0" in LOOPING
+    spec = tmp_path / "loop.toml"
+    spec.write_text(SPEC.replace('"crash"', '"loop"') + "[params]\ncrash_at = 0.05\n")
+    store = tmp_path / "cubes"
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg",
+           "DITHERLAB_BLOCK_TIMEOUT_S": "3"}
+    out = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
+    assert out.returncode == 1, (out.returncode, out.stdout, out.stderr[-3000:])
+    assert "Traceback" not in out.stderr, out.stderr
+    hung = [ln for ln in out.stderr.splitlines() if "no result after 3 s" in ln]
+    assert len(hung) == 2 and all(ln.startswith("ditherlab: warning: block ") and
+                                  "DITHERLAB_BLOCK_TIMEOUT_S" in ln for ln in hung), out.stderr
+    assert "2 of 3 points failed" in out.stderr
+    [cube_file] = store.glob("*/cube.nc")
+    with xr.open_dataset(cube_file) as cube:
+        status = cube["status"].values.ravel()
+        W = np.broadcast_to(cube["W"].values[:, None, None, None], cube["status"].shape).ravel()
+        assert list(status[W > 0.05]) == [2, 2]   # FAILED
+        assert list(status[W < 0.05]) == [0]
+        assert np.isfinite(cube["v_mean"].values.ravel()[W < 0.05]).all()
+
+    bad = ditherlab("submit", spec, "-q", store=store,
+                    env={**env, "DITHERLAB_BLOCK_TIMEOUT_S": "soon"})
+    assert bad.returncode == 2 and bad.stderr.strip().splitlines() == [
+        "ditherlab: DITHERLAB_BLOCK_TIMEOUT_S='soon': expected a number of seconds"], \
+        bad.stderr
 
 
 @pytest.mark.parametrize("crash_at, where", [
