@@ -143,6 +143,11 @@ def timeout_s(env: str = TIMEOUT_ENV, default: float = TIMEOUT_S) -> float:
     return value
 
 
+def block_timeout_s() -> float:
+    """``$DITHERLAB_BLOCK_TIMEOUT_S`` (:data:`BLOCK_TIMEOUT_ENV`), else :data:`TIMEOUT_S`."""
+    return timeout_s(BLOCK_TIMEOUT_ENV, TIMEOUT_S)
+
+
 def isolated(who: str, fn, *args):
     """``fn(*args)`` in a child Python process, for code a user brings: numba checks no
     bounds, so a model that reads or writes outside its arrays can kill the process that

@@ -200,11 +200,11 @@ class Compute:
 def _block_timeout_s() -> float:
     """``$DITHERLAB_BLOCK_TIMEOUT_S`` (sweeps.workers.task.watched), checked by the submitter:
     a bad value is refused (exit 2), not a failed block on every worker."""
-    from engine.user_code import BLOCK_TIMEOUT_ENV, TIMEOUT_S, ModelError, timeout_s
+    from engine.user_code import ModelError, block_timeout_s
 
     from ..errors import RefusedError
 
     try:
-        return timeout_s(BLOCK_TIMEOUT_ENV, TIMEOUT_S)
+        return block_timeout_s()
     except ModelError as exc:
         raise RefusedError(str(exc)) from None

@@ -89,9 +89,9 @@ def watched(scene, points: np.ndarray, p: np.ndarray, settings):
     import threading
 
     from engine.blocks import run_block
-    from engine.user_code import BLOCK_TIMEOUT_ENV, TIMEOUT_S, ModelError, timeout_s
+    from engine.user_code import BLOCK_TIMEOUT_ENV, ModelError, block_timeout_s
 
-    limit, box = timeout_s(BLOCK_TIMEOUT_ENV, TIMEOUT_S), {}
+    limit, box = block_timeout_s(), {}
 
     def run() -> None:
         try:
