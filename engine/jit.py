@@ -47,15 +47,27 @@ def cache_dir() -> Path:
     return cache_root() / f"numba-{fingerprint()}"
 
 
+_ENGINE_CACHE: str | None = None   # numba's CACHE_DIR for the engine's kernels
+
+
 def _use_engine_cache_dir() -> None:
     """Point numba's cache at :func:`cache_dir` before any engine function is decorated
-    (the locator is chosen at decoration time). Unwritable -> numba's own default."""
+    (the locator is chosen at decoration time). Unwritable -> numba's own default.
+
+    :func:`njit` points it there again before each decoration: numba re-reads its whole
+    configuration from the environment at the first compile after any ``NUMBA_*`` variable
+    changed (``numba.core.config.reload_config``), which sets ``CACHE_DIR`` back to
+    ``$NUMBA_CACHE_DIR`` or "" -- each source folder's ``__pycache__``, a cache that no
+    engine fingerprint names. engine.gpu sets such a variable; after a GPU run every scene
+    a process made next was cached in the checkout's ``engine/__pycache__`` and missed this
+    cache (tests/engine/test_disk_cache.py)."""
+    global _ENGINE_CACHE
     path = cache_dir()
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
         return
-    numba.config.CACHE_DIR = str(path)
+    _ENGINE_CACHE = numba.config.CACHE_DIR = str(path)
 
 
 _use_engine_cache_dir()
@@ -167,6 +179,8 @@ def njit(fn=None, *, refcount: bool = True, **options):
         uuid = closure_uuid(func)
         if func.__closure__:
             _name_by_uuid(func, uuid)
+        if _ENGINE_CACHE is not None:   # (a config reload may have reset it)
+            numba.config.CACHE_DIR = _ENGINE_CACHE
         dispatcher = numba.njit(**options)(func)
         if uuid is not None:
             try:

@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -92,3 +93,44 @@ def test_kernels_cached_by_different_processes_do_not_collide(tmp_path):
              **run_pair(tmp_path, b)}     # process 2 compiles b (another closure) and caches it
     loaded = run_pair(tmp_path, a, b)     # process 3 loads both
     assert loaded == fresh
+
+
+# a factory in a module of its own folder: numba's fallback cache is that folder's __pycache__
+FACTORY = """
+from engine.jit import njit
+
+def make(a):
+    @njit
+    def scale(x):
+        return x * a
+    return scale
+"""
+RELOAD = """
+import os, sys
+import numba
+from engine.jit import cache_dir
+os.environ["NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS"] = "0"   # as engine.gpu sets it
+numba.njit(lambda x: x + 1.0)(1.0)   # a compile: numba re-reads its configuration here
+sys.path.insert(0, sys.argv[1])
+import factory
+factory.make(2.0)(1.0)   # a kernel made after the reload
+print(cache_dir())
+"""
+
+
+def test_a_numba_config_reload_keeps_new_kernels_in_the_engine_cache(tmp_path):
+    """numba re-reads its configuration from the environment at the first compile after any
+    NUMBA_* variable changed (engine.gpu sets one), which put CACHE_DIR back to "": every
+    kernel made after that in the process was cached in its source folder's __pycache__ (the
+    checkout's engine/, a cache no engine fingerprint names) and missed the engine's cache --
+    in CI the GPU simulator's child compiled 11 of its 13 scenes so, 13-22 s each, although
+    test_engine_vs_scipy had put five of them in the engine's cache."""
+    (tmp_path / "src").mkdir()
+    (tmp_path / "src" / "factory.py").write_text(FACTORY)
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "cache")}
+    out = subprocess.run([sys.executable, "-c", RELOAD, str(tmp_path / "src")], env=env,
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr[-2000:]
+    engine_cache = out.stdout.strip().splitlines()[-1]
+    assert not list((tmp_path / "src").rglob("*.nbi")), "cached in the source folder"
+    assert list(Path(engine_cache).rglob("factory.make.locals.scale*.nbi"))
