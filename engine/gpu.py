@@ -60,7 +60,8 @@ def _no_small_grid_warning() -> None:
     environment changes); a ``warnings`` filter around the launch is not thread-safe and let
     the warning through on a lent H200 (docs/measured/h200-2026-11-27.txt). Process-wide:
     the warning is off for the caller's own kernels too, and setting a ``NUMBA_*`` variable
-    makes numba's next config reload re-read them all from the environment."""
+    makes numba's next config reload re-read them all from the environment (which would
+    reset numba's cache folder: engine.jit.njit sets it again before each kernel it makes)."""
     os.environ["NUMBA_CUDA_LOW_OCCUPANCY_WARNINGS"] = "0"
     try:
         from numba.cuda.core import config
