@@ -11,9 +11,10 @@ import json
 import math
 import re
 import resource
-import time
 import tomllib
 from pathlib import Path
+
+from ...helpers import cpu_seconds
 
 ROOT = Path(__file__).resolve().parents[3]
 SPECS = sorted((ROOT / "specs").glob("*.toml"))
@@ -124,18 +125,18 @@ def check(case: Case, tmp: Path, index: int = 0, commands=("plan",)) -> dict:
     path.write_bytes(case.payload())
     out = {"case": case, "faults": []}
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    t0 = time.process_time()   # CPU seconds: a busy machine does not inflate them
-    try:
-        with _captured_warnings() as caught:
-            spec = load_spec(path)
-        out["outcome"], out["warnings"] = "accepted", caught
-    except SpecError as exc:
-        out["outcome"], out["lines"] = "refused", exc.problems
-    except (KeyboardInterrupt, SystemExit):
-        raise
-    except BaseException as exc:  # noqa: BLE001 -- what the fuzzer is for
-        out["outcome"], out["error"] = "traceback", f"{type(exc).__name__}: {str(exc)[:120]}"
-    out["cpu_s"] = time.process_time() - t0
+    with cpu_seconds() as spent:   # CPU seconds: no machine load inflates them
+        try:
+            with _captured_warnings() as caught:
+                spec = load_spec(path)
+            out["outcome"], out["warnings"] = "accepted", caught
+        except SpecError as exc:
+            out["outcome"], out["lines"] = "refused", exc.problems
+        except (KeyboardInterrupt, SystemExit):
+            raise
+        except BaseException as exc:  # noqa: BLE001 -- what the fuzzer is for
+            out["outcome"], out["error"] = "traceback", f"{type(exc).__name__}: {str(exc)[:120]}"
+    out["cpu_s"] = spent()
     out["rss_growth_mb"] = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss0) / 1024
     faults = out["faults"]
     if out["outcome"] == "accepted":
