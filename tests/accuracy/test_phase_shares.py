@@ -25,7 +25,7 @@ from sweeps.spec import parse_spec
 
 REFS = json.loads((Path(__file__).parents[1] / "hard" / "phase_references.json").read_text())
 SHARES = ("stick_fraction", "presliding_fraction", "slip_fraction")
-OUTPUTS = [*SHARES, "near_slip_fraction", "alpha_hist"]
+OUTPUTS = [*SHARES, "near_slip_fraction", "alpha_hist"]   # (also tests/e2e/test_accuracy_gate.py's)
 
 
 def _spec(W=0.0, omega=1000.0, t_transient=0.0, accuracy="standard"):

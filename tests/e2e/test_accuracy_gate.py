@@ -16,13 +16,15 @@ pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
 # the Sec. 7 slider without dither at explicit DP5 rtol 1e-4: the slip share (sliding =
 # |z| within 1e-9 of z_ss) needs the bristle state to ~1e-10 and moves by ~1e-2 between
-# rtol 1e-4 and the finer 1e-6 (engine.observables), far over the standard promise 1e-3
+# rtol 1e-4 and the finer 1e-6 (engine.observables), far over the standard promise 1e-3.
+# The outputs of tests/accuracy/test_phase_shares.py's undithered scene: one kernel for both
 LOOSE_SPEC = """
 name = "gate-loose"
 friction = "elastoplastic"
 dither = "none"
 method = "simulate"
-outputs = ["stick_fraction", "slip_fraction", "near_slip_fraction", "F_mean"]
+outputs = ["stick_fraction", "presliding_fraction", "slip_fraction", "near_slip_fraction",
+           "alpha_hist"]
 accuracy = { integrator = "dopri5", rtol = 1e-4, atol = 1e-7 }
 [params]
 lam = 0.8

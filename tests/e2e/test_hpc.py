@@ -6,13 +6,17 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
+from distributed import Client
 
 import sweeps
+from engine.jit import cache_dir
 
 from ..helpers import SIMULATE_OUTPUTS, wait_for
 
@@ -33,15 +37,20 @@ def _written(path) -> dict | None:
 
 
 def _wait_for_workers(address: str, n: int, seconds=120.0) -> None:
-    from distributed import Client
-
     with Client(address, timeout="30s") as client:
         client.wait_for_workers(n, timeout=seconds)
 
 
 @pytest.fixture
 def batch_cluster(tmp_path):
-    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "shared-cache")}
+    shared = tmp_path / "shared-cache"
+    # the folder a site shares between its jobs, holding what earlier jobs compiled: here a
+    # copy of this test run's kernel cache (its other tests compile this scene), so the
+    # workers load the kernels instead of compiling them again (24 s of a CI run's CPU)
+    ours = cache_dir()
+    if ours.is_dir():
+        shutil.copytree(ours, shared / ours.name, ignore=shutil.ignore_patterns("compiling"))
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(shared)}
     sched_file = tmp_path / "scheduler.json"
     procs = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler",
                                "--port", "0", "--dashboard-address", ":0",
@@ -73,7 +82,11 @@ def test_submit_to_batch_started_workers(batch_cluster, tmp_path):
                          capture_output=True, text=True, timeout=600, env=env)
     assert out.returncode == 0, out.stderr
     assert "done" in out.stdout and "4/4 ok" in out.stdout
-    assert list((tmp_path / "shared-cache").glob("numba-*")), "the kernel cache lives in the shared folder"
+    # the batch-started workers use the shared kernel cache ($DITHERLAB_CACHE_DIR)
+    with Client(address, timeout="30s") as client:
+        where = client.run(lambda: str(__import__("engine.jit").jit.cache_dir()))
+    assert len(where) == 2 and all(Path(w) == tmp_path / "shared-cache" / cache_dir().name
+                                   for w in where.values()), where
     # the numbers equal those of the service's own local cluster
     key = sweeps.load_spec(SPEC).sweep_id
     remote = sweeps.open_sweep(key, store=tmp_path / "store")

@@ -16,8 +16,9 @@ from engine.api import simulate
 from engine.blocks import run_block
 from engine.scene import Scene
 from engine.settings import Settings
+from tests.engine.common import ALL
 
-OUT = ("v_mean", "F_mean", "stick_fraction")
+OUT = ("v_mean", "F_mean", "stick_fraction")   # compared; the scenes compile every output
 
 
 @pytest.mark.parametrize("system, friction, dither, p", [
@@ -29,8 +30,10 @@ OUT = ("v_mean", "F_mean", "stick_fraction")
 @pytest.mark.long
 @pytest.mark.parametrize("integrator", ["rk4", "dopri5"])
 def test_folded_kernel_matches_the_run_time_one(system, friction, dither, p, integrator):
+    # every output (tests/engine/common.py): the run-time LuGre kernels are those the
+    # DOP853 comparison and the batch tests compile
     folded = Scene.from_params(p, system=system, friction=friction, dither=dither,
-                               outputs=OUT, integrator=integrator)
+                               outputs=ALL, integrator=integrator)
     assert (folded.delta, folded.delta_d) == (p[P.DELTA], p[P.DELTA_D])
     generic = folded.with_(delta=None, delta_d=None)
     settings = Settings(rtol=1e-8, steps_per_period=16)
