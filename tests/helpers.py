@@ -180,8 +180,10 @@ def cpu_seconds():
     the calling thread's alone (``time.thread_time``), with the garbage collector held off.
     Neither a busy machine, nor another thread of the test process (``process_time``
     counted a pytest worker's leftover threads: 1.9 s for a 5 ms parse once in CI), nor
-    a full collection of a long-lived worker's heap inflates them."""
-    gc.collect()
+    a full collection of a long-lived worker's heap inflates them. (No collection before
+    the block either: in a worker that had run for 20 minutes, one per fuzzed spec made
+    tests/sweeps/spec/test_spec_fuzz.py take 119 s instead of 4.)"""
+    was_enabled = gc.isenabled()
     gc.disable()
     t0 = time.thread_time()
     spent = [None]
@@ -189,4 +191,5 @@ def cpu_seconds():
         yield lambda: spent[0]
     finally:
         spent[0] = time.thread_time() - t0
-        gc.enable()
+        if was_enabled:
+            gc.enable()

@@ -15,7 +15,8 @@ from engine import params as P
 from engine.api import simulate
 from engine.settings import Settings
 from tests.engine import reference as R
-from tests.engine.common import scene
+from tests.engine.common import ALL, scene
+from tests.engine.gpu_cases import SHARED as GPU_SHARED
 
 T_END = 2.0
 SLOW = {"slow_a": 1.7, "slow_omega": 0.3}   # Sec. 7 slow force
@@ -36,15 +37,32 @@ CASES = [
 ]
 
 
+# The scenes tests/engine/test_gpu.py (and the batch tests) compile too keep every output:
+# one kernel for both. The others compile only what is compared here: compiling an
+# elasto-plastic scene took 17-19 s with every output, 10-13 s with F_mean alone (its
+# phase bookkeeping; measured in fresh caches), and this module is mostly compiling.
+SHARED = {(c.get("friction", "lugre"), c.get("dither", "square-velocity"))
+          for c in GPU_SHARED.values() if c.get("integrator", "dopri5") == "dopri5"}
+
+STATIC = ("stribeck", "coulomb")
+
+
+def _outputs(law, dither):
+    if (law, dither) in SHARED:
+        return ALL
+    # the static laws' scenes without dither serve both tests below
+    return ("F_mean", "stick_fraction", "max_stick") if law in STATIC else ("F_mean",)
+
+
 @pytest.mark.long
 @pytest.mark.parametrize("law,dither,kw,y0", CASES, ids=[f"{c[0]}-{c[1]}" for c in CASES])
 def test_matches_dop853(law, dither, kw, y0):
     p = P.pack(t_end=T_END, e0=y0[0], v0=y0[1], z0=y0[2], **kw)
     ref = R.slider(P.unpack(p), law, dither, y0, T_END)
-    r = simulate(scene(law, dither, slow="slow_a" in kw), p, Settings(rtol=1e-10, atol=1e-12),
-                 record=True)
+    sc = scene(law, dither, slow="slow_a" in kw, outputs=_outputs(law, dither))
+    r = simulate(sc, p, Settings(rtol=1e-10, atol=1e-12), record=True)
     assert r.status == 0
-    if law in ("stribeck", "coulomb"):       # sliding regime: |u| stays clear of the band
+    if law in STATIC:                        # sliding regime: |u| stays clear of the band
         u_min = np.abs(r.y[:, 1]).min() - kw.get("W", 0.0)
         assert u_min > 0.05
     err = np.abs(r.y_end[:3] - ref[:3]) * [1.0, 1.0, p[P.SIGMA0]]   # z in units of fc/sigma0
@@ -58,7 +76,8 @@ def test_static_law_stick_slip_matches_exact_sticking(law):
     t_end, band = 40.0, 1e-6
     p = P.pack(t_end=t_end, v_ref=0.1, stick_band=band, long_stick=1.0)
     (e, v), sticks = R.static_stick_slip(P.unpack(p), law, t_end)
-    r = simulate(scene(law, "none"), p, Settings(rtol=1e-10, atol=1e-12))
+    r = simulate(scene(law, "none", outputs=_outputs(law, "none")), p,
+                 Settings(rtol=1e-10, atol=1e-12))
     assert r.status == 0
     # O(band): the engine sticks at |v| = band, not 0, so e drifts by band * stick time
     assert abs(r.y_end[0] - e) < 10 * band * t_end and abs(r.y_end[1] - v) < 2 * band
