@@ -178,11 +178,12 @@ def ticking_clock(step=timedelta(milliseconds=1)):
 def cpu_seconds():
     """Measure the CPU seconds of the code in the block, read as ``spent()`` after it:
     the calling thread's alone (``time.thread_time``), with the garbage collector held off.
-    Neither a busy machine, nor another thread of the test process (``process_time``
-    counted a pytest worker's leftover threads: 1.9 s for a 5 ms parse once in CI), nor
-    a full collection of a long-lived worker's heap inflates them. (No collection before
-    the block either: in a worker that had run for 20 minutes, one per fuzzed spec made
-    tests/sweeps/spec/test_spec_fuzz.py take 119 s instead of 4.)"""
+    Neither a busy machine, nor another thread of the test process, nor a full collection
+    of a long-lived worker's heap inflates them. (``process_time``, which counts every
+    thread, once read 1.9 s in CI for a parse its neighbouring cases did in 5 ms; which of
+    the two it was is not known. No collection before the block either: in a worker that
+    had run for 20 minutes, one per fuzzed spec made tests/sweeps/spec/test_spec_fuzz.py
+    take 119 s instead of 4.)"""
     was_enabled = gc.isenabled()
     gc.disable()
     t0 = time.thread_time()
