@@ -79,6 +79,24 @@ def pytest_report_header(config):
 
 # --- mounts: a small disk and a read-only store (root only; tests/guarantee.py) ----------
 
+@pytest.fixture(autouse=True, scope="module")
+def _one_hdf5_library(request):
+    """A test module must not load netCDF4 into a pytest worker: its wheel brings an HDF5
+    library of its own beside h5py's (HDF5 2.2.0 and 2.0.0 here), and two in one process
+    are a known hazard (netcdf4-python #653, h5py #2171; once a pytest worker here died of
+    a segmentation fault in a garbage collection with both loaded, cause not established).
+    ``xr.open_dataset`` without ``engine=`` picks netCDF4
+    when it is installed; tests/test_cf.py reads with netCDF4 in a child process."""
+    import sys
+
+    before = "netCDF4" in sys.modules
+    yield
+    if not before and "netCDF4" in sys.modules:
+        pytest.fail(f"{request.module.__name__} loaded netCDF4 into this pytest worker (a second "
+                    "HDF5 library beside h5py's): open cubes with engine='h5netcdf', or use "
+                    "netCDF4 in a child process (tests/test_cf.py)", pytrace=False)
+
+
 def _mount(args: list[str], where: Path) -> None:
     where.mkdir(parents=True, exist_ok=True)
     proc = subprocess.run(["mount", *args, str(where)], capture_output=True, text=True)

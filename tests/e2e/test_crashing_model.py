@@ -100,7 +100,7 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
     assert "2 of 3 points failed" in out.stderr
 
     [cube_file] = store.glob("*/cube.nc")
-    with xr.open_dataset(cube_file) as cube:
+    with xr.open_dataset(cube_file, engine="h5netcdf") as cube:
         status = cube["status"].values.ravel()
         v_mean = cube["v_mean"].values.ravel()
         W = np.broadcast_to(cube["W"].values[:, None, None, None], cube["status"].shape).ravel()
@@ -142,7 +142,7 @@ def test_a_law_that_loops_for_ever_fails_its_block_in_one_line_and_keeps_the_res
                                   "DITHERLAB_BLOCK_TIMEOUT_S" in ln for ln in hung), out.stderr
     assert "2 of 3 points failed" in out.stderr
     [cube_file] = store.glob("*/cube.nc")
-    with xr.open_dataset(cube_file) as cube:
+    with xr.open_dataset(cube_file, engine="h5netcdf") as cube:
         status = cube["status"].values.ravel()
         W = np.broadcast_to(cube["W"].values[:, None, None, None], cube["status"].shape).ravel()
         assert list(status[W > 0.05]) == [2, 2]   # FAILED

@@ -117,7 +117,8 @@ def test_a_simulated_gpu_sweep_equals_the_cpu_sweep(spec, tmp_path):
     paths = [line.split("cube: ")[1] for proc in (gpu, cpu) for line in proc.stdout.splitlines()
              if line.startswith("cube: ")]
     assert len(paths) == 2 and paths[0] != paths[1]
-    with xr.open_dataset(paths[0]) as g, xr.open_dataset(paths[1]) as c:
+    with xr.open_dataset(paths[0], engine="h5netcdf") as g, \
+            xr.open_dataset(paths[1], engine="h5netcdf") as c:
         assert json.loads(g.attrs["engine_settings"])["device"] == "cuda"
         assert json.loads(c.attrs["engine_settings"])["device"] == "cpu"
         assert (g["status"] == 0).all()
@@ -167,7 +168,7 @@ def test_serve_leaves_the_gpus_sweeps_to_serve_device_cuda(spec, tmp_path):
     finally:
         serve.kill()
     cube = root / gpu_id / "cube.nc"
-    with xr.open_dataset(cube) as ds:
+    with xr.open_dataset(cube, engine="h5netcdf") as ds:
         assert json.loads(ds.attrs["engine_settings"])["device"] == "cuda"
         assert (ds["status"] == 0).all()
 

@@ -63,7 +63,8 @@ def test_the_gpu_workers_compute_every_block_and_the_cube_is_the_cpus(  # noqa: 
     path = [ln.split("cube: ")[1] for ln in out.stdout.splitlines() if ln.startswith("cube: ")]
     res = sweeps.run_sweep({**SPEC, "device": "cpu"}, store=tmp_path / "cpu", workers=1,
                            progress=False)
-    with xr.open_dataset(path[0]) as g, xr.open_dataset(res.cube_path) as cpu:
+    with xr.open_dataset(path[0], engine="h5netcdf") as g, \
+            xr.open_dataset(res.cube_path, engine="h5netcdf") as cpu:
         assert json.loads(g.attrs["engine_settings"])["device"] == "cuda"
         assert (g["status"] == 0).all()
         for name in SPEC["outputs"]:
