@@ -406,26 +406,36 @@ def test_a_runner_whose_lease_was_taken_over_stops_and_leaves_the_row_alone(
     submits no further block and does not overwrite the new holder's row."""
     import sweeps.workers.task as T
     from sweeps import parse_spec, submit
-    from sweeps.run.lease_holder import CANCEL_POLL_S
+    from sweeps.run.lease_holder import LEASE_LOST, Lease
 
-    # each block outlasts the runner's poll of its lease (at most every CANCEL_POLL_S): the
-    # takeover during block 3 is seen before block 4 is submitted
-    block_s = CANCEL_POLL_S + 0.05
     plan = make_plan(parse_spec(SMALL_AVG))
     root = tmp_path / "store"
     calls = []
+    noticed = threading.Event()   # the runner's stop question answered "lease lost"
+    stop_reason = Lease.stop_reason
 
-    def slow(scene, points, p, settings, index):
+    def watched(lease):
+        reason = stop_reason(lease)
+        if reason == LEASE_LOST:
+            noticed.set()
+        return reason
+
+    def held(scene, points, p, settings, index):
         calls.append(1)
-        if len(calls) == 3:   # someone else now holds the sweep
+        if len(calls) == 1:   # someone else now holds the sweep
             store.Catalogue(root).update(plan.sweep_id, owner="elsewhere:1",
                                          heartbeat=time.time())
-        time.sleep(block_s)
+        # no block ends before the runner has seen the takeover (its poll, at most every
+        # CANCEL_POLL_S), whatever the machine's load: the blocks in flight then are all
+        # that run (no sleep that a slow thread could outlast)
+        assert noticed.wait(60), "the runner did not notice the takeover in 60 s"
         return REAL_COMPUTE_BLOCK(scene, points, p, settings, index)
 
-    monkeypatch.setattr(T, "compute_block", slow)
+    monkeypatch.setattr(Lease, "stop_reason", watched)
+    monkeypatch.setattr(T, "compute_block", held)
     res = submit(plan, root, progress=False)
-    assert res.blocks_run == 3 and res.state == "running", res   # stopped after block 3
+    # the first blocks submitted (one per thread, plus one waiting), none after
+    assert res.blocks_run == len(calls) < len(plan.blocks) and res.state == "running", res
     assert "took the sweep over" in res.message
     row = _row(root, plan.sweep_id)
     assert (row["state"], row["owner"]) == ("running", "elsewhere:1")
