@@ -21,7 +21,6 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy import ndimage
 
 from .cube import AXES, OK, PROVENANCE, output_names
 from .cubedata import as_dataset
@@ -214,6 +213,7 @@ def stability_labels(
     labels = np.full(unstable.shape, STABLE, np.int8)
     mask = unstable & valid
     if mask.any():
+        from scipy import ndimage   # (here: importing it cost a query or map process 0.3 s)
         components, _ = ndimage.label(mask, _plane_structure(mask.ndim, (v_ref_axis, w_axis)))
         at_w_min = np.take(components, 0, axis=w_axis)
         primary = np.isin(components, np.unique(at_w_min[at_w_min > 0]))
