@@ -72,6 +72,7 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
     plan = make_plan(spec)   # blocks of 4 points that say they took 0.25 s each: 1 s
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
+    TASK_POINTS.clear()   # (this test's tasks alone, whatever ran before it)
     sink = _Sink()
     with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
                       dashboard_address=None) as cluster, Client(cluster) as client:

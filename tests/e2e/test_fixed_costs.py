@@ -13,7 +13,6 @@ import signal
 import subprocess
 import sys
 import textwrap
-import threading
 from pathlib import Path
 
 import pytest
@@ -24,6 +23,7 @@ from sweeps.planning.plan import make_plan, work_s
 from sweeps.run import submit as submit_module
 from sweeps.run.submit import submit
 from sweeps.spec import load_spec, parse_spec
+from sweeps.workers import cluster as cluster_module
 from sweeps.workers.cluster import wait_for_stops
 from sweeps.workers.task import block_key
 
@@ -60,10 +60,14 @@ def test_threads_write_the_cube_a_local_cluster_writes(tmp_path, monkeypatch):
     threads = submit(plan, tmp_path / "threads", progress=False)
     assert "cluster_s" not in threads.timings, threads.timings   # it ran here
     monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
+    with cluster_module._STOPPING_LOCK:
+        before = list(cluster_module._STOPPING)
     cluster = submit(make_plan(parse_spec(SPEC)), tmp_path / "cluster", progress=False)
     assert "cluster_s" in cluster.timings, cluster.timings
     # the result came back before the cluster stopped; the stop ends on its own thread
-    stopping = [t for t in threading.enumerate() if t.name == "ditherlab-cluster-stop"]
+    # (handed to close_later: listed until wait_for_stops, however fast the stop was)
+    with cluster_module._STOPPING_LOCK:
+        stopping = [t for t in cluster_module._STOPPING if t not in before]
     wait_for_stops()
     assert stopping and not any(t.is_alive() for t in stopping)
     assert threads.state == cluster.state == "done"

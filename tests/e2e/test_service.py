@@ -118,6 +118,10 @@ def test_detach_returns_at_once_and_serve_runs_the_queue(tmp_path, spec_file, en
         # a sweep queued while serve runs is picked up too
         avg_id = detach(avg, root, env)
         wait_for(lambda: _row(root, avg_id)["state"] == "done", "the second sweep done", 120)
+        # serve's own row turns idle after the sweep's row reads done (it records the run,
+        # then beats): waited for, not assumed of the second it takes `status` to start
+        wait_for(lambda: [s["sweep_id"] for s in store.Catalogue(root).servers()] == [""],
+                 "serve idle", 60)
         listing = ditherlab("status", store=root, env=env, check=True).stdout
         assert "serve: " in listing and "idle" in listing, listing
         assert serve.stop() == 0, serve.text()

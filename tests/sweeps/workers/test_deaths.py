@@ -4,6 +4,9 @@ come back (sweeps.workers.matching.WorkerCheck). The whole path, with a law that
 worker, is tests/e2e/test_crashing_model.py."""
 from __future__ import annotations
 
+import time
+from types import SimpleNamespace
+
 import pytest
 
 from sweeps.workers import deaths as D
@@ -49,6 +52,13 @@ def test_the_engines_own_models_are_never_given_up():
     assert d.of_block == {} and d.alone == set()
 
 
+def _clock(monkeypatch, monotonic) -> None:
+    """``matching``'s own clock (its module-level ``time``), not the process's: a thread left
+    by an earlier test (a dask or asyncio loop) reads ``time.monotonic`` too."""
+    monkeypatch.setattr(matching, "time", SimpleNamespace(monotonic=monotonic,
+                                                          sleep=time.sleep))
+
+
 class _NoWorkers:
     def nthreads(self):
         return {}
@@ -56,7 +66,7 @@ class _NoWorkers:
 
 def test_a_local_cluster_without_workers_ends_the_run_after_its_bound(monkeypatch):
     clock = iter([100.0, 130.0, 161.0])
-    monkeypatch.setattr(matching.time, "monotonic", lambda: next(clock))
+    _clock(monkeypatch, lambda: next(clock))
     check = matching.WorkerCheck(_NoWorkers())
     check.back_within_s = 60.0
     assert check.matching() == {}   # t = 100: none since now
@@ -70,7 +80,7 @@ def test_a_local_cluster_without_workers_is_scaled_again_once_before_it_gives_up
     plain dask: no worker and no nanny left after 18-24 segfaulting tasks); after REVIVE_S
     without a worker the cluster is asked for its workers again, once per such gap."""
     clock = iter([0.0, 5.0, 11.0, 30.0, 31.0, 50.0])
-    monkeypatch.setattr(matching.time, "monotonic", lambda: next(clock))
+    _clock(monkeypatch, lambda: next(clock))
     asked = []
     check = matching.WorkerCheck(_NoWorkers())
     check.back_within_s, check.revive = 60.0, lambda: asked.append(1)
@@ -84,6 +94,6 @@ def test_a_local_cluster_without_workers_is_scaled_again_once_before_it_gives_up
 
 
 def test_other_clusters_wait_for_their_workers_at_will(monkeypatch):
-    monkeypatch.setattr(matching.time, "monotonic", lambda: pytest.fail("no clock needed"))
+    _clock(monkeypatch, lambda: pytest.fail("no clock needed"))
     check = matching.WorkerCheck(_NoWorkers())   # a batch or external cluster: no bound
     assert check.matching() == {} and check.matching() == {}
