@@ -43,7 +43,7 @@ CASES = [
 # phase bookkeeping; measured in fresh caches), and this module is mostly compiling.
 # (Taking every output for the four scenes test_engine_observables.py and
 # test_engine_paper_figures.py simulate too was measured and dropped: in two CI runs this
-# module took 53-59 s more, those two 46 s less.)
+# module took 53-59 s more, those two 46 s less; the three 287-292 s, without 281-287 s.)
 SHARED = {(c.get("friction", "lugre"), c.get("dither", "square-velocity"))
           for c in GPU_SHARED.values() if c.get("integrator", "dopri5") == "dopri5"}
 
