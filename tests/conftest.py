@@ -77,7 +77,7 @@ def pytest_report_header(config):
         return "long tests deselected: `scripts/test -m long` runs them (.ci/run does)"
 
 
-# --- mounts: a small disk and a read-only store (root only; tests/guarantee.py) ----------
+# --- one HDF5 library per pytest worker ---------------------------------------------------
 
 @pytest.fixture(autouse=True, scope="module")
 def _one_hdf5_library(request):
@@ -85,8 +85,8 @@ def _one_hdf5_library(request):
     library of its own beside h5py's (HDF5 2.2.0 and 2.0.0 here), and two in one process
     are a known hazard (netcdf4-python #653, h5py #2171; once a pytest worker here died of
     a segmentation fault in a garbage collection with both loaded, cause not established).
-    ``xr.open_dataset`` without ``engine=`` picks netCDF4
-    when it is installed; tests/test_cf.py reads with netCDF4 in a child process."""
+    ``xr.open_dataset`` without ``engine=`` picks netCDF4 when it is installed;
+    tests/test_cf.py reads with netCDF4 in a child process."""
     import sys
 
     before = "netCDF4" in sys.modules
@@ -96,6 +96,8 @@ def _one_hdf5_library(request):
                     "HDF5 library beside h5py's): open cubes with engine='h5netcdf', or use "
                     "netCDF4 in a child process (tests/test_cf.py)", pytrace=False)
 
+
+# --- mounts: a small disk and a read-only store (root only; tests/guarantee.py) ----------
 
 def _mount(args: list[str], where: Path) -> None:
     where.mkdir(parents=True, exist_ok=True)
