@@ -26,7 +26,8 @@ functions it calls, so an edit elsewhere in the engine could replay stale machin
 The cache therefore lives in a folder named by a hash of every engine source file (the
 engine fingerprint, engine.provenance, also recorded in every cube):
 ``$DITHERLAB_CACHE_DIR`` (default ``~/.cache/ditherlab``) ``/numba-<fingerprint>``. Any edit of
-the engine starts a fresh cache; delete old ``numba-*`` folders at will.
+the engine starts a fresh cache; the folders no engine has used for 30 days are removed
+(engine.cache_folders).
 """
 from __future__ import annotations
 
@@ -40,6 +41,7 @@ from pathlib import Path
 import numba
 import numpy
 
+from . import cache_folders
 from .provenance import cache_root, fingerprint
 
 
@@ -67,6 +69,7 @@ def _use_engine_cache_dir() -> None:
         path.mkdir(parents=True, exist_ok=True)
     except OSError:
         return
+    cache_folders.use(path)
     _ENGINE_CACHE = numba.config.CACHE_DIR = str(path)
 
 
