@@ -28,12 +28,6 @@ CODE = {kind: i for i, kind in enumerate(KINDS)}
 
 
 @njit(cache=True)
-def half_period(omega):
-    """Time between square-wave switches, pi / omega."""
-    return np.pi / omega
-
-
-@njit(cache=True)
 def switch_time(k, omega):
     """k-th switching instant t_k = k pi / omega (exact multiple, no accumulation)."""
     return k * (np.pi / omega)

@@ -34,7 +34,6 @@ from .stability import linearisation, static_max_real_eig
 
 #: Columns of ``points`` (engine.params.POINT_AXES) and the parameters they override.
 POINT_AXES = P.POINT_AXES
-_OVERRIDES = tuple(P.INDEX[name] for name in POINT_AXES)
 _AVERAGED_LAWS = ("lugre", "stribeck", "coulomb")
 #: Default relative tolerance of the harmonic balance on the friction samples.
 HBM_RTOL = 1e-6

@@ -14,12 +14,6 @@ from ..jit import njit
 
 
 @njit(cache=True, error_model="numpy")
-def rate(u, gu, sigma0):
-    """Relaxation rate k = sigma0 |u| / g(u) of the bristle state (1/time)."""
-    return sigma0 * abs(u) / gu
-
-
-@njit(cache=True, error_model="numpy")
 def dz(u, z, gu, sigma0, alpha):
     """Bristle rate dz/dt (Eq. 2.3) for interface velocity u, given g(u) and alpha."""
     return u - alpha * sigma0 * abs(u) * z / gu
