@@ -36,20 +36,59 @@ def start_method() -> str:
     (:mod:`sweeps.workers.preload`); each worker is forked from it, ready. It lives until
     this process ends, so it keeps the environment and ``sys.path`` it started with: a
     later cluster whose process changed them (another ``DITHERLAB_CACHE_DIR``, a test's
-    gate, a path in front) gets spawned workers, which start from the present ones. The
+    gate, a path in front) gets spawned workers, which start from the present ones, and so
+    does a process whose fork server would import another engine (:func:`_server_imports_ours`). The
     server is started by the first worker's start, after dask's nanny has put its
     pre-spawn environment (``OMP_NUM_THREADS``, ``MALLOC_TRIM_THRESHOLD_``,
     ``PYTHONHASHSEED``) into this process's: started earlier, it would not pass that on."""
     global _forked_from
     import multiprocessing
 
-    if "forkserver" not in multiprocessing.get_all_start_methods():
+    if "forkserver" not in multiprocessing.get_all_start_methods() or not _server_imports_ours():
         return "spawn"
     now = (_environment(), tuple(sys.path))
     if _forked_from is None:
         _forked_from = now
         _preload_only_ours()
     return "forkserver" if now == _forked_from else "spawn"
+
+
+_ours_where: tuple | None = None   # (cwd, environment) -> whether the server imports ours
+
+
+def _server_imports_ours() -> bool:
+    """Whether a fork server started now would import the engine and sweeps from where this
+    process did. Python 3.11's fork server takes no ``sys.path`` from its starter (it gets
+    one and drops it): it is ``python -c`` in this folder, so a folder of the current
+    directory or of ``$PYTHONPATH`` named ``engine`` or ``sweeps`` (another checkout, a
+    worktree of an older commit) comes before the installed package, and its workers would
+    run that engine (each refused by the fingerprint check: "no worker runs this engine").
+    Asked of such a process once per directory and environment (about 40 ms); spawned
+    workers take this process's ``sys.path``."""
+    global _ours_where
+    import subprocess
+
+    key = (os.getcwd(), _environment())
+    if _ours_where is not None and _ours_where[0] == key:
+        return _ours_where[1]
+    here = [str(_origin(name)) for name in _OURS]
+    ask = ("import importlib.util as u, sys; "
+           f"print(*[(u.find_spec(n) or None) and u.find_spec(n).origin for n in {_OURS!r}], "
+           "sep='\\n')")
+    try:
+        got = subprocess.run([sys.executable, "-c", ask], capture_output=True, text=True,
+                             timeout=60).stdout.split("\n")[:len(_OURS)]
+    except (OSError, subprocess.SubprocessError):
+        got = []
+    _ours_where = (key, got == here)
+    return _ours_where[1]
+
+
+_OURS = ("engine", "sweeps", "store")
+
+
+def _origin(name: str):
+    return sys.modules[name].__spec__.origin if name in sys.modules else None
 
 
 def local_settings(dashboard: str | None = None):

@@ -112,3 +112,37 @@ def test_a_cluster_the_caller_makes_afterwards_is_started_as_dask_would(tmp_path
                          timeout=600, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-3000:]
     assert json.loads(out.stdout.strip().splitlines()[-1]) == [[False, "theirs", True]]
+
+
+WHERE_WORKERS_IMPORT = """
+import json
+import sweeps
+from sweeps.workers.cluster import dask_client
+
+
+def where():
+    import sys
+    import sweeps
+    return [sweeps.__file__, "sweeps.workers.preload" in sys.modules]
+
+
+if __name__ == "__main__":
+    with dask_client(workers=1) as client:
+        print(json.dumps([sweeps.__file__, *client.run(where).values()]))
+"""
+
+
+def test_a_folder_named_sweeps_in_the_current_directory_does_not_reach_the_workers(tmp_path):
+    """Python 3.11's fork server drops the ``sys.path`` it is given and imports from its
+    current directory first: started in a folder with another ``sweeps`` (another checkout,
+    a worktree: scripts/bit_identical.py's recipe), its workers imported that one and the
+    sweep failed ("no worker runs this engine"). Now such a process gets spawned workers."""
+    (tmp_path / "elsewhere" / "sweeps").mkdir(parents=True)
+    (tmp_path / "elsewhere" / "sweeps" / "__init__.py").write_text("WRONG = True\n")
+    script = tmp_path / "where.py"
+    script.write_text(WHERE_WORKERS_IMPORT)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                         timeout=600, cwd=tmp_path / "elsewhere")
+    assert out.returncode == 0, out.stderr[-3000:]
+    ours, (theirs, forked) = json.loads(out.stdout.splitlines()[-1])
+    assert "elsewhere" not in ours and theirs == ours and not forked
