@@ -7,7 +7,10 @@
 To record the code before a change, run this script with the ``PYTHONPATH`` of a worktree of
 that commit (``git worktree add /tmp/bits-before <commit>``; ``PYTHONPATH=/tmp/bits-before
 .venv/bin/python /tmp/bits-before/scripts/bit_identical.py record ...``): the editable install's
-finder comes after ``PYTHONPATH`` and the local dask workers inherit it. The first line printed
+finder comes after ``PYTHONPATH`` and the local dask workers inherit it. For a commit before
+a9db7bc run it from the worktree's folder (``cd /tmp/bits-before``): Python 3.11's fork
+server imports from its current directory first, and those commits forked their workers
+from it even in another checkout (sweeps.workers.local_start). The first line printed
 names the folder the packages were imported from.
 
 What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
