@@ -66,15 +66,16 @@ def _server_imports_ours() -> bool:
     Asked of such a process once per directory and environment (about 40 ms); spawned
     workers take this process's ``sys.path``."""
     global _ours_where
+    import importlib.util
     import subprocess
 
     key = (os.getcwd(), _environment())
     if _ours_where is not None and _ours_where[0] == key:
         return _ours_where[1]
-    here = [str(_origin(name)) for name in _OURS]
-    ask = ("import importlib.util as u, sys; "
-           f"print(*[(u.find_spec(n) or None) and u.find_spec(n).origin for n in {_OURS!r}], "
-           "sep='\\n')")
+    # (the same question here: a package this process has not imported yet counts too)
+    ask = f"import importlib.util as u; print(*[getattr(u.find_spec(n), 'origin', None) " \
+          f"for n in {_OURS!r}], sep='\\n')"
+    here = [str(getattr(importlib.util.find_spec(n), "origin", None)) for n in _OURS]
     try:
         got = subprocess.run([sys.executable, "-c", ask], capture_output=True, text=True,
                              timeout=60).stdout.split("\n")[:len(_OURS)]
@@ -85,10 +86,6 @@ def _server_imports_ours() -> bool:
 
 
 _OURS = ("engine", "sweeps", "store")
-
-
-def _origin(name: str):
-    return sys.modules[name].__spec__.origin if name in sys.modules else None
 
 
 def local_settings(dashboard: str | None = None):
