@@ -21,7 +21,7 @@ ok and wrong numbers.
    of a scene, estimated over the whole grid (:func:`rates`):
 
    - the bristle relaxation of LuGre and elasto-plastic friction (Eq. 2.3 linearised in z
-     for frozen u, the relaxation rate of engine.friction.lugre.dz): ``lambda = -sigma0 |u| / g(u)``, ``g >= fc``,
+     for frozen u, engine.friction.lugre.dz): ``lambda = -sigma0 |u| / g(u)``, ``g >= fc``,
      ``|u| <= u_max``; slider ``u_max = 2 max|v_ref| + max W + |A|`` (the estimate of
      :func:`sweeps.spec.accuracy.rk4_fits` plus the slow force of amplitude ``A``, which on the
      unit spring-mass drives the slider up to about ``A``: max|v| = 1.50 measured on the

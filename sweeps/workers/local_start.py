@@ -53,6 +53,7 @@ def start_method() -> str:
     return "forkserver" if now == _forked_from else "spawn"
 
 
+_OURS = ("engine", "sweeps", "store")   # the packages a worker must import from where we do
 _ours_where: tuple | None = None   # (cwd, environment) -> whether the server imports ours
 
 
@@ -83,9 +84,6 @@ def _server_imports_ours() -> bool:
         got = []
     _ours_where = (key, got == here)
     return _ours_where[1]
-
-
-_OURS = ("engine", "sweeps", "store")
 
 
 def local_settings(dashboard: str | None = None):
