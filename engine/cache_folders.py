@@ -17,12 +17,15 @@ anything.
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import time
 from pathlib import Path
 
 STAMP = ".last-used"
-PREFIX = "numba-"
+# a kernel folder's name (engine.jit.cache_dir: 12 hex digits of the fingerprint); nothing
+# else in the root is touched, whatever folder $DITHERLAB_CACHE_DIR names
+FOLDER = re.compile(r"numba-[0-9a-f]{12}")
 DAY_S = 86400.0
 KEEP_DAYS = 30.0
 
@@ -48,13 +51,14 @@ def last_used(folder: Path) -> float:
 
 
 def stale_folders(root: Path, current: Path, now: float, days: float) -> list[Path]:
-    """The ``numba-*`` folders of ``root`` other than ``current`` unused for ``days``."""
+    """The kernel folders (:data:`FOLDER`) of ``root`` other than ``current`` unused for
+    ``days``."""
     try:
         entries = list(root.iterdir())
     except OSError:
         return []
     return sorted(p for p in entries
-                  if p.name.startswith(PREFIX) and p.name != current.name and p.is_dir()
+                  if FOLDER.fullmatch(p.name) and p.name != current.name and p.is_dir()
                   and now - last_used(p) > days * DAY_S)
 
 

@@ -37,10 +37,11 @@ def test_folders_unused_for_a_month_go_the_rest_stay(tmp_path, monkeypatch):
     recent = folder(tmp_path, "numba-bbbbbbbbbbbb", 29)
     unstamped_old = folder(tmp_path, "numba-dddddddddddd", 45, stamped=False)
     other = folder(tmp_path, "not-a-kernel-folder", 400)
+    theirs = folder(tmp_path, "numba-notes", 400)   # a user's folder in a root they chose
     removed = cf.use(current, now=NOW)
     assert removed == [old, unstamped_old]
     assert not old.exists() and not unstamped_old.exists()
-    assert recent.exists() and other.exists() and current.exists()
+    assert recent.exists() and other.exists() and theirs.exists() and current.exists()
     assert (current / cf.STAMP).stat().st_mtime == NOW
 
 
