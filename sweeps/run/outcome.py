@@ -112,6 +112,7 @@ def abort(plan, sink, lease, exc: BaseException, *, serving: bool) -> None:
     counts, progress = {}, "starting"
     if sink is not None:
         try:
+            sink.settle()
             store.publish(sink.cube, sink.sweep.cube)
         except store.errors.NoSpaceError:
             pass   # the previous cube stays whole; the error itself is reported

@@ -37,6 +37,7 @@ class BlockSink:
         self.last_publish, self.publish_s = time.monotonic(), 0.0
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
+        self._unfilled: list[tuple[int, BlockRecord]] = []   # journaled, not yet in the cube
         self.fingerprint = results_fingerprint()     # what every journaled block must carry
         self.foreign_blocks = 0                      # blocks refused for another engine
         self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
@@ -52,11 +53,11 @@ class BlockSink:
         cost 2.8 ms of CPU and two fsyncs a block, scripts/bench_scale.py), then into the
         cube, then one progress report and at most one publish."""
         ours = [(b, r) for b, r in items if self._ours(b, r)]
+        self._unfilled = ours   # until they are in the cube: settle() after an interrupt
         if ours:
             self.journal.write_group(ours)
-        for b, record in ours:
-            store.fill(self.cube, record)
-            self.done.add(b)
+        self._fill(ours)
+        self._unfilled = []
         self.blocks_run += len(ours)
         since = time.monotonic() - self.last_publish
         if since > max(PUBLISH_EVERY_S, self.publish_s / PUBLISH_SHARE) and \
@@ -66,6 +67,21 @@ class BlockSink:
             self.last_publish = time.monotonic()
             self.publish_s = self.last_publish - t
         self._report()
+
+    def _fill(self, items: list[tuple[int, BlockRecord]]) -> None:
+        for b, record in items:
+            store.fill(self.cube, record)
+            self.done.add(b)
+
+    def settle(self) -> None:
+        """After an interrupt inside :meth:`many` (a Ctrl-C between the journal's write and
+        the cube): the blocks that reached the journal go into the cube and the count too,
+        so the cube published and the catalogue's ``done_blocks`` agree with the journal
+        (before, a Ctrl-C there recorded one block fewer than was kept)."""
+        if self._unfilled:
+            kept = self.journal.files()
+            self._fill([(b, r) for b, r in self._unfilled if b in kept])
+            self._unfilled = []
 
     def _ours(self, b: int, record: BlockRecord) -> bool:
         """The block's engine is this sweep's: the last line of defence

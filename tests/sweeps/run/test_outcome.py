@@ -112,3 +112,32 @@ def test_the_status_table_names_a_finished_sweeps_accuracy_warnings(done_sweep):
     status, out, _ = in_process("status", "--store", root)
     row = next(line for line in out.splitlines() if line.startswith(plan.sweep_id))
     assert status == 0 and f"1 accuracy warning (`ditherlab status {plan.sweep_id}`)" in row
+
+
+def test_a_ctrl_c_between_the_journal_and_the_cube_counts_what_the_journal_kept(tmp_path,
+                                                                              monkeypatch):
+    """A Ctrl-C that lands after a block's journal file is written but before the block is
+    in the cube (sweeps.run.sink.BlockSink.many): the row said one block fewer than the
+    journal kept (CI, test_ctrl_c_of_a_submitter_reads_cancelled_not_running: 1 against 2)
+    and the published cube lacked the block. The interrupt is raised here exactly there."""
+    real_fill, calls = store.fill, []
+
+    def fill(cube, record):
+        calls.append(record)
+        if len(calls) == 2:   # the second finished block: journaled, not yet in the cube
+            raise KeyboardInterrupt
+        return real_fill(cube, record)
+
+    monkeypatch.setattr(store, "fill", fill)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(SPEC, tmp_path, progress=False)
+    monkeypatch.setattr(store, "fill", real_fill)
+    plan = make_plan(parse_spec(SPEC))
+    sweep = store.SweepDir(tmp_path, plan.sweep_id)
+    kept = store.Journal(sweep.journal).files()
+    row = store.Catalogue(tmp_path).get(plan.sweep_id)
+    assert len(kept) >= 2, kept   # (the interrupted block was journaled)
+    assert row["state"] == "cancelled" and row["done_blocks"] == len(kept), (row, kept)
+    assert f"interrupted after {len(kept)}/{len(plan.blocks)} blocks" in row["message"], row
+    from sweeps.run.sink import done_blocks
+    assert sorted(done_blocks(plan, store.read_cube(sweep.cube))) == sorted(kept)
