@@ -116,6 +116,11 @@ class Journal:
         return atomic_write(self.folder / groups.file_name(self._seq),
                             groups.image(self._seq, arrays, extra, CHECKSUM))
 
+    def last_group(self) -> Path | None:
+        """The group file this writer wrote last, or was writing when interrupted (then
+        it exists only if the rename was reached); None before its first group."""
+        return None if self._seq is None else self.folder / groups.file_name(self._seq)
+
     def files(self) -> dict[int, Path]:
         """Block id -> file (its block file, or the last group holding it), unverified.
         Temporary files of writers that are gone are removed first."""

@@ -89,11 +89,15 @@ class LeaseMixin:
         is taken before the first read, so a read-decide-write cannot interleave with
         another process's."""
         with self._connection() as con:
-            con.execute("BEGIN IMMEDIATE")
             try:
+                # (inside the try: a Ctrl-C raised as BEGIN returns -- it may wait up to the
+                # busy timeout -- left the shared connection in a transaction, and every
+                # later one, the run's final state included, failed)
+                con.execute("BEGIN IMMEDIATE")
                 yield con
             except BaseException:
-                con.execute("ROLLBACK")
+                if con.in_transaction:
+                    con.execute("ROLLBACK")
                 raise
             con.execute("COMMIT")
 

@@ -72,6 +72,7 @@ class SampleRuns:
         self.allowed: dict[object, frozenset] = {}   # task -> the workers it may run on
         self.deaths = Deaths(counting=bool(plan.scene.digests))   # per group of re-runs
         self.given_up = ""                   # why a re-run was given up (gather raises it)
+        self.shown = -1   # re-runs finished as last shown beside the points (show_reruns)
 
     def pending(self) -> list:
         """The tasks not finished."""
@@ -200,7 +201,10 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
     ``started``) and compare."""
     runs = started or SampleRuns(plan)
     index, finer = runs.index, runs.finer
-    done, total = runs.finished(), len(runs.order)
+    # counted from what the points' bar last showed: a re-run that finished after that
+    # and before this line got no bar and the display stopped at k-1/N (a race
+    # tests/e2e/test_progress_phases.py could lose)
+    done, total = (runs.finished() if runs.shown < 0 else runs.shown), len(runs.order)
     if display is None or done == total:   # (re-runs among the blocks: all finished)
         result = runs.gather(client)
     else:   # the re-runs still running after the last point, counted from those done

@@ -131,9 +131,11 @@ def _fig02_reading(ctx, v_m, v_a, omegas, delta_d, reading):
     p = ctx.pack(P.CONTACT_DEFAULTS, delta_d=delta_d)
     res, _ = _scan(v_m, v_a, omegas, p)
     lo, hi = _parts(res[0], p), _parts(res[-1], p)
-    ratio = {k: hi[k] / lo[k] for k in lo}
+    with np.errstate(invalid="ignore"):   # a part that is zero (sigma1 = 0): no ratio, NaN
+        ratio = {k: hi[k] / lo[k] for k in lo}
+        higher = {k: float(np.sqrt(np.sum(hi[k][1:] ** 2) / np.sum(lo[k][1:] ** 2)))
+                  for k in lo}
     conv = "'strong attenuation' = 10x or more between the scene's lowest and top frequency"
-    higher = {k: float(np.sqrt(np.sum(hi[k][1:] ** 2) / np.sum(lo[k][1:] ** 2))) for k in lo}
     checks = [
         Check("the bristle force sigma0 z: every higher harmonic strongly attenuated",
               ", ".join(f"F{n} x{ratio['sigma0 z'][n - 1]:.2g}" for n in HARMONICS),
@@ -162,8 +164,10 @@ def fig02(ctx) -> FigureResult:
         amps = [_parts(r, p) for r in res]
         for a, part in zip(ax, ("total", "sigma0 z", "sigma1 dz/dt")):
             for n in range(1, 6):
-                a.loglog(omegas, [x[part][n - 1] for x in amps], ls, ms=3, c=f"C{n - 1}",
-                         label=f"|F_{n}|" if dd == 2.0 else None)
+                y = [x[part][n - 1] for x in amps]
+                if max(y) > 0:   # (a part that is zero has nothing to draw on log axes)
+                    a.loglog(omegas, y, ls, ms=3, c=f"C{n - 1}",
+                             label=f"|F_{n}|" if dd == 2.0 else None)
             a.set(xlabel="omega (rad/s)", ylabel="amplitude (N)")
             G.label(a, part)
         tag = f"_dd{dd:g}"

@@ -112,7 +112,6 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
     queue = list(reversed(longest_first(todo, cost_of)))   # popped from the end
     inflight: dict = {}        # future -> (its blocks, the workers it may run on)
-    shown = [-1]               # re-runs finished, as last shown on the bar
     cost = [0.0, 0, 0.0]       # seconds computed, blocks back, their expected seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
     # event loop as each block finishes: one f.result() per block costs a round trip to that
@@ -170,8 +169,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if not stopping:
             fill()
         if not inflight and (stopping or not queue):
+            show_reruns(bar, sample)   # (the estimate counts on from what is shown)
             break
-        show_reruns(bar, sample, shown)
+        show_reruns(bar, sample)
         if not done.has_ready():
             bar.keep_alive()
             sleep_until_one(done, WAKE_S)
@@ -254,10 +254,11 @@ def rerun_group_s(cost: list) -> float:
     return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
 
 
-def show_reruns(bar, sample, shown: list[int]) -> None:
-    """The re-runs finished so far, beside the points (``error estimate k/N``)."""
-    if sample is not None and (k := sample.finished()) != shown[0]:
-        shown[0] = k
+def show_reruns(bar, sample) -> None:
+    """The re-runs finished so far, beside the points (``error estimate k/N``); the
+    error estimate's own bar goes on from the last count shown (``sample.shown``)."""
+    if sample is not None and (k := sample.finished()) != sample.shown:
+        sample.shown = k
         bar.set_postfix_str(f"error estimate {k}/{len(sample.order)}")
 
 

@@ -104,7 +104,6 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
     queue = list(reversed(longest_first(todo, cost_of)))
     inflight: dict = {}   # future -> block
-    shown = [-1]
     window = pool.threads + 1
     while True:
         interrupt.check()
@@ -121,6 +120,7 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
             inflight[pool.submit(task.compute_block, plan.scene, plan.block_points(b),
                                  plan.params, plan.numerics.settings, plan.blocks[b])] = b
         if not inflight and (stopping or not queue):
+            show_reruns(bar, sample)   # (the estimate counts on from what is shown)
             break
         running = sample.pending() if sample is not None else []
         done = pool.wait_any([*inflight, *running], TICK_S * 5)
@@ -132,7 +132,7 @@ def _dispatch_local(pool, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 f.cancel()   # not started yet
             _collect(plan, [f for f in inflight if not f.cancelled()], inflight, sink, bar)
             raise failed
-        show_reruns(bar, sample, shown)
+        show_reruns(bar, sample)
         bar.keep_alive()
 
 

@@ -78,9 +78,10 @@ class BlockSink:
         the cube): the blocks that reached the journal go into the cube and the count too,
         so the cube published and the catalogue's ``done_blocks`` agree with the journal
         (before, a Ctrl-C there recorded one block fewer than was kept)."""
-        if self._unfilled:
-            kept = self.journal.files()
-            self._fill([(b, r) for b, r in self._unfilled if b in kept])
+        if self._unfilled:   # (a block retried is in the journal already: in this group?)
+            kept, group = self.journal.files(), self.journal.last_group()
+            self._fill([(b, r) for b, r in self._unfilled
+                        if group is not None and kept.get(b) == group])
             self._unfilled = []
 
     def _ours(self, b: int, record: BlockRecord) -> bool:

@@ -209,3 +209,33 @@ def test_old_catalogue_gains_the_service_columns(tmp_path):
 
 def test_store_exports_the_states():
     assert store.STATES == ("queued", "running", "done", "partial", "failed", "cancelled")
+
+
+def test_a_ctrl_c_as_begin_returns_leaves_no_transaction_open(cat):
+    """KeyboardInterrupt raised just after ``BEGIN IMMEDIATE`` returned (Python runs the
+    signal handler then; the BEGIN may have waited for another writer): the connection,
+    shared by every later call of this catalogue, was left inside the transaction, and the
+    run's final state then failed ("cannot start a transaction within a transaction")."""
+    with cat._connection() as con:
+        real = con
+
+    class InterruptedOnce:   # the connection, with the signal arriving after one BEGIN
+        armed = True
+
+        def execute(self, sql, *args):
+            out = real.execute(sql, *args)
+            if self.armed and sql == "BEGIN IMMEDIATE":
+                InterruptedOnce.armed = False
+                raise KeyboardInterrupt
+            return out
+
+        def __getattr__(self, name):
+            return getattr(real, name)
+
+    cat._con = InterruptedOnce()
+    me = owner_tag()
+    with pytest.raises(KeyboardInterrupt):
+        cat.acquire("s1", me)
+    assert not real.in_transaction
+    assert cat.acquire("s1", me)[0]
+    assert cat.finish("s1", "cancelled", owner=me)[0]

@@ -141,3 +141,25 @@ def test_a_ctrl_c_between_the_journal_and_the_cube_counts_what_the_journal_kept(
     assert f"interrupted after {len(kept)}/{len(plan.blocks)} blocks" in row["message"], row
     from sweeps.run.sink import done_blocks
     assert sorted(done_blocks(plan, store.read_cube(sweep.cube))) == sorted(kept)
+
+
+def test_a_ctrl_c_before_the_final_state_is_recorded_leaves_the_row_resumable(tmp_path,
+                                                                            monkeypatch):
+    """Every block computed and published, then a Ctrl-C before the final state is written
+    (sweeps.run.submit.Submission.finish): the row stayed ``running`` under the dead
+    process (read as stalled); now it reads cancelled with every block counted, and the
+    next submit finishes it."""
+    import sweeps.run.submit as submit_module
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(submit_module, "final_result", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(SPEC, tmp_path, progress=False)
+    monkeypatch.undo()
+    plan = make_plan(parse_spec(SPEC))
+    row = store.Catalogue(tmp_path).get(plan.sweep_id)
+    assert (row["state"], row["owner"], row["done_blocks"]) == \
+        ("cancelled", "", len(plan.blocks)), row
+    assert run_sweep(SPEC, tmp_path, progress=False).state == "done"
