@@ -95,11 +95,11 @@ class LeaseMixin:
                 # later one, the run's final state included, failed)
                 con.execute("BEGIN IMMEDIATE")
                 yield con
+                con.execute("COMMIT")   # (a failed COMMIT, e.g. disk full, rolls back too)
             except BaseException:
                 if con.in_transaction:
                     con.execute("ROLLBACK")
                 raise
-            con.execute("COMMIT")
 
     @staticmethod
     def _row(con, sweep_id: str) -> dict:

@@ -105,15 +105,22 @@ def attached_result(plan, sweep, row, t0) -> SubmitResult:
                         attached_to=row.get("attached_to") or "another process")
 
 
-def abort(plan, sink, lease, exc: BaseException, *, serving: bool) -> None:
-    """The run raised: keep what was finished (publish), and give the lease back as
-    ``failed`` with the error, or -- interrupted (Ctrl-C, a second signal to serve) --
-    as ``cancelled`` (``queued`` under serve), resumable."""
+def abort(plan, sink, lease, exc: BaseException, *, serving: bool,
+          publish: bool = True) -> None:
+    """The run raised: keep what was finished (publish, unless ``publish`` is False: done
+    already; never when the lease was taken over, the new holder's cube is not ours to
+    overwrite), and give the lease back as ``failed`` with the error, or -- interrupted
+    (Ctrl-C, a second signal to serve) -- as ``cancelled`` (``queued`` under serve),
+    resumable."""
     counts, progress = {}, "starting"
     if sink is not None:
         try:
             sink.settle()
-            store.publish(sink.cube, sink.sweep.cube)
+        except Exception as err:  # noqa: BLE001 -- the journal keeps the blocks anyway
+            log.warning("could not add the last journaled blocks to the cube: %s", err)
+        try:
+            if publish and not lease.lost.is_set() and sink.stopped != LEASE_LOST:
+                store.publish(sink.cube, sink.sweep.cube)
         except store.errors.NoSpaceError:
             pass   # the previous cube stays whole; the error itself is reported
         except Exception as err:  # noqa: BLE001 -- the journal keeps the blocks anyway

@@ -38,6 +38,7 @@ class BlockSink:
         self.done = set(done_blocks(plan, cube))    # blocks with every point computed
         self.blocks_run = 0
         self._unfilled: list[tuple[int, BlockRecord]] = []   # journaled, not yet in the cube
+        self._before = None   # the journal's last group before theirs
         self.fingerprint = results_fingerprint()     # what every journaled block must carry
         self.foreign_blocks = 0                      # blocks refused for another engine
         self.stopped: str | None = None              # lease_holder.CANCELLED, SHUTDOWN, ...
@@ -53,6 +54,7 @@ class BlockSink:
         cost 2.8 ms of CPU and two fsyncs a block, scripts/bench_scale.py), then into the
         cube, then one progress report and at most one publish."""
         ours = [(b, r) for b, r in items if self._ours(b, r)]
+        self._before = self.journal.last_group()   # (set first: settle() reads both)
         self._unfilled = ours   # until they are in the cube: settle() after an interrupt
         if ours:
             self.journal.write_group(ours)
@@ -78,11 +80,10 @@ class BlockSink:
         the cube): the blocks that reached the journal go into the cube and the count too,
         so the cube published and the catalogue's ``done_blocks`` agree with the journal
         (before, a Ctrl-C there recorded one block fewer than was kept)."""
-        if self._unfilled:   # (a block retried is in the journal already: in this group?)
-            kept, group = self.journal.files(), self.journal.last_group()
-            self._fill([(b, r) for b, r in self._unfilled
-                        if group is not None and kept.get(b) == group])
-            self._unfilled = []
+        group = self.journal.last_group()   # this call's group, if it got that far ...
+        if self._unfilled and group not in (None, self._before) and group.exists():
+            self._fill(self._unfilled)   # ... and its rename was reached
+        self._unfilled = []
 
     def _ours(self, b: int, record: BlockRecord) -> bool:
         """The block's engine is this sweep's: the last line of defence

@@ -107,13 +107,9 @@ class Submission:
                 return self.result(cube, blocks_run=0)
             self.register(cube)
             attached = self.take_lease()
-        except BaseException:
-            self.close_compute()
-            raise
-        if attached is not None:
-            self.close_compute(later=True)
-            return attached_result(self.plan, self.sweep, attached, self.t0)
-        try:
+            if attached is not None:
+                self.close_compute(later=True)
+                return attached_result(self.plan, self.sweep, attached, self.t0)
             self.here = self.runs_here(self.todo)
             if needs_estimate(self.plan, self.sweep, cube) or self.todo:
                 self.start_early(self.todo)   # (unless started above)
@@ -121,7 +117,8 @@ class Submission:
             self.compute_blocks()
             self.publish()
         except BaseException as exc:
-            abort(self.plan, self.sink, self.lease, exc, serving=self.stop is not None)
+            if self.lease is not None:   # (before it, nothing of the run is this call's)
+                abort(self.plan, self.sink, self.lease, exc, serving=self.stop is not None)
             self.close_compute()
             raise
         return self.finish(max_blocks)
@@ -266,7 +263,8 @@ class Submission:
             result = self.result(self.sink.cube, blocks_run=self.sink.blocks_run, lease=self.lease,
                                  stopped=self.sink.stopped, max_blocks=max_blocks)
         except BaseException as exc:   # (else a Ctrl-C here left the row running: stalled)
-            abort(self.plan, self.sink, self.lease, exc, serving=self.stop is not None)
+            abort(self.plan, self.sink, self.lease, exc, serving=self.stop is not None,
+                  publish=False)   # (published just before)
             self.close_compute()
             raise
         if self.opened and self.compute.early:
