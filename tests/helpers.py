@@ -26,6 +26,12 @@ from .hooks.ditherlab_test_hooks import GATE_ENV, RERUN_GATE_ENV  # noqa: F401 (
 BIN = Path(sys.executable).parent / "ditherlab"
 HOOKS = Path(__file__).resolve().parent / "hooks"   # the tests' hooks in a worker's task
 TIMING = ("cost_s",)   # wall-clock seconds differ between runs; everything else must not
+# a test's own LocalCluster: no dashboard, and the scheduler's HTTP server (health checks)
+# on loopback at a free port, as sweeps.workers.cluster starts ours. dashboard_address=None
+# alone put that server at 127.0.0.1:8787, a fixed port: with another cluster on the machine
+# (the other pytest worker's) dask warned "Port 8787 is already in use" (ss -ltnp checked)
+LOOPBACK_CLUSTER = {"dashboard_address": None,
+                    "scheduler_kwargs": {"dashboard_address": "127.0.0.1:0"}}
 
 
 def as_a_terminal_job() -> None:

@@ -18,6 +18,7 @@ from sweeps.run import dispatch
 from sweeps.spec import parse_spec
 from sweeps.version import results_fingerprint
 from sweeps.workers import task
+from tests.helpers import LOOPBACK_CLUSTER
 
 pytestmark = pytest.mark.cluster   # what it starts (tests/conftest.py)
 
@@ -75,7 +76,7 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
     TASK_POINTS.clear()   # (this test's tasks alone, whatever ran before it)
     sink = _Sink()
     with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
         dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
     assert sorted(sink.got) == list(range(len(plan.blocks)))
     points = plan.points
@@ -134,7 +135,7 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
     sink = _Sink()
     # more threads than re-runs: the blocked re-runs leave threads to the blocks
     with LocalCluster(n_workers=1, threads_per_worker=len(sample.order) + 4,
-                      processes=False, dashboard_address=None) as cluster, \
+                      processes=False, **LOOPBACK_CLUSTER) as cluster, \
             Client(cluster) as client:
         try:
             dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink,

@@ -16,7 +16,7 @@ import sweeps
 from sweeps import cli
 from sweeps.errors import AmbiguousSweepError
 
-from ..helpers import SIMULATE_SPEC
+from ..helpers import LOOPBACK_CLUSTER, SIMULATE_SPEC
 
 pytestmark = pytest.mark.subprocess   # what it starts (tests/conftest.py)
 
@@ -160,7 +160,7 @@ def test_run_sweep_takes_a_spec_and_an_existing_client(tmp_path):
                              "grid": {"W": [0.0, 0.2], "omega": [300.0], "v_ref": [0.4],
                                       "v_d": [0.1]}})
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
-                      dashboard_address=None) as cluster, Client(cluster) as client:
+                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
         res = sweeps.run_sweep(spec, store=tmp_path / "s", client=client, progress=False)
         assert res.state == "done" and res.n_ok == 2
         assert client.status == "running"

@@ -52,7 +52,8 @@ if __name__ == "__main__":
     with dask_client(workers=1):
         pass
     os.environ["DITHERLAB_TEST_MARK"] = "theirs"
-    with LocalCluster(n_workers=1, processes=True, dashboard_address=None) as cluster, \\
+    with LocalCluster(n_workers=1, processes=True, dashboard_address=None,
+                      scheduler_kwargs={"dashboard_address": "127.0.0.1:0"}) as cluster, \\
             Client(cluster) as client:
         print(json.dumps(list(client.run(
             lambda: ("sweeps.workers.preload" in __import__("sys").modules,
