@@ -131,7 +131,8 @@ def _fig02_reading(ctx, v_m, v_a, omegas, delta_d, reading):
     p = ctx.pack(P.CONTACT_DEFAULTS, delta_d=delta_d)
     res, _ = _scan(v_m, v_a, omegas, p)
     lo, hi = _parts(res[0], p), _parts(res[-1], p)
-    with np.errstate(invalid="ignore", divide="ignore"):   # a part that is zero (sigma1 = 0): no ratio, NaN
+    # a part that is zero (sigma1 = 0 in a wrong model) has no ratio: NaN, without a warning
+    with np.errstate(invalid="ignore", divide="ignore"):
         ratio = {k: hi[k] / lo[k] for k in lo}
         higher = {k: float(np.sqrt(np.sum(hi[k][1:] ** 2) / np.sum(lo[k][1:] ** 2)))
                   for k in lo}

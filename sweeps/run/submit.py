@@ -3,10 +3,10 @@ cube rebuilt from the journal and published atomically (DESIGN.md §4).
 
 The submitting process is the only writer, and only while it holds the sweep's lease in the
 catalogue (sweeps.service): a second submitter of a running sweep attaches to it instead of
-computing. Workers compute and return arrays; they never touch files. Each finished block is
-journaled at once (temporary name, fsync, rename), so a submitter killed at any instant loses
-at most the blocks in flight; the cube is republished every few blocks and at the end. A
-resubmitted spec computes only the blocks missing from the journal.
+computing. Workers compute and return arrays; they never touch files. Each finished block
+is journaled at once (temporary name, fsync, rename), so a submitter killed at any instant
+loses at most the blocks in flight; the cube is republished every few blocks and at the
+end. A resubmitted spec computes only the blocks missing from the journal.
 
 The pieces: where blocks are computed (sweeps.workers.compute.Compute), the worker's task
 (sweeps.workers.task), what a run starts from (sweeps.run.preparation), the empty cube of

@@ -14,6 +14,7 @@ from sweeps.estimates.error_reruns import ESTIMATE_FILE, needs_estimate
 from sweeps.planning.plan import make_plan
 from sweeps.run.lease_holder import CANCELLED, SHUTDOWN, Lease
 from sweeps.run.outcome import final_result
+from sweeps.run.sink import done_blocks
 from sweeps.spec import parse_spec
 
 # 4 draft LuGre points, short: run on threads of this process in a few seconds; the scene
@@ -139,7 +140,6 @@ def test_a_ctrl_c_between_the_journal_and_the_cube_counts_what_the_journal_kept(
     assert len(kept) >= 2, kept   # (the interrupted block was journaled)
     assert row["state"] == "cancelled" and row["done_blocks"] == len(kept), (row, kept)
     assert f"interrupted after {len(kept)}/{len(plan.blocks)} blocks" in row["message"], row
-    from sweeps.run.sink import done_blocks
     assert sorted(done_blocks(plan, store.read_cube(sweep.cube))) == sorted(kept)
 
 
