@@ -32,6 +32,7 @@ from functools import cache
 
 import numpy as np
 
+from . import status as S
 from .gpu_source import kernel_namespace, kernel_source, simulated
 from .kernels import method_module, point_kernel
 
@@ -199,7 +200,10 @@ def run(scene, points: np.ndarray, p: np.ndarray, cfg: np.ndarray):
     kernel = block_kernel(scene)
     rec = np.empty((0, pk.n + 1))
     out = np.full((m, pk.n_out), np.nan)
-    status = np.zeros(m, dtype=np.int8)
+    # FAILED until a thread writes its point's status: an exception raised in device code
+    # (a brought model's ``raise``) returns from the kernel without a word unless it was
+    # compiled with debug=True, and the point would have read OK with NaN outputs
+    status = np.full(m, S.FAILED, dtype=np.int8)
     counters = np.zeros((m, 3), dtype=np.int64)
     if m == 0:
         return out, status, counters, 0.0

@@ -10,11 +10,12 @@ an HPC cluster"); ``scheduler=`` takes an address instead.
 from __future__ import annotations
 
 import sys
+import warnings
 from pathlib import Path
 
 from .errors import InferredPointsWarning, RefusedError
 from .lookup import inferred_note, read_notes, read_sweep, store_root
-from .spec.load import DEFAULT_MAX_POINTS, Spec, load_spec
+from .spec.load import DEFAULT_MAX_POINTS, Spec, SpecWarning, load_spec
 
 
 def run_sweep(spec, store: str | Path | None = None, *, client=None,
@@ -58,6 +59,8 @@ def run_sweep(spec, store: str | Path | None = None, *, client=None,
             raise RefusedError(f"device: expected 'cpu' or 'cuda', got {device!r}")
         spec = spec.model_copy(update={"device": device})
     plan, root = make_plan(spec), store_root(store)
+    if plan.device_note:   # "device cuda: ...: this sweep runs on the CPU" (the CLI prints it)
+        warnings.warn(plan.device_note, SpecWarning, stacklevel=2)
     compute = Compute.chosen(workers=workers, scheduler=scheduler, client=client,
                              dashboard=dashboard)
     res = submit(plan, root, compute, progress=shown(progress))

@@ -218,7 +218,9 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     outputs = resolve_outputs(spec.method, spec.outputs, spec.system)
     scene = _scene(spec, p, num.integrator, outputs)
     device_note = gpu_refusal(spec, scene)
-    if spec.device == "cuda" and not device_note:
+    if device_note:   # the CPU's sweep (its id, its cube's spec): not a GPU result
+        spec = spec.model_copy(update={"device": "cpu"})
+    elif spec.device == "cuda":
         num = replace(num, settings=replace(num.settings, device="cuda"))
     g = spec.grid_facts
     costs = point_costs(spec, g.coords)

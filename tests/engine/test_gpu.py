@@ -86,6 +86,32 @@ def test_the_simulated_gpu_kernel_equals_the_cpu_block_kernel(simulated, case_id
     assert all(got["finite"].values()), got["finite"]   # the case computes real numbers
 
 
+# a launch in which no thread writes its status (as on a GPU when device code raises: without
+# debug=True the thread returns early and the error is dropped)
+SILENT = """
+import numpy as np
+from engine import gpu
+from tests.engine.gpu_cases import build
+
+scene, p, points, settings = build("lugre-square-rk4")
+gpu._launch = lambda kernel, scene, grid, stream, args: None
+out, status, counters, _ = gpu.run(scene, points, p, np.zeros(1))
+print(status.tolist(), bool(np.isnan(out).all()))
+"""
+
+
+@pytest.mark.subprocess
+def test_a_point_whose_thread_wrote_no_status_reads_failed_not_ok():
+    """Before, the status array went to the GPU as zeros (OK): a brought model's ``raise``
+    left its points OK with NaN outputs. Now FAILED until the thread writes the status."""
+    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1",
+           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    proc = subprocess.run([sys.executable, "-c", SILENT], capture_output=True, text=True,
+                          env=env, cwd=ROOT, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert proc.stdout.split() == ["[2,", "2,", "2]", "True"]   # engine.status.FAILED
+
+
 @pytest.mark.parametrize("integrator", ["rk4", "dopri5"])
 def test_the_gpu_scratch_mirrors_the_cpu_scratch(integrator):
     pk = point_kernel(scene(integrator=integrator))
