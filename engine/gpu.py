@@ -88,9 +88,15 @@ def check_device() -> str:
         raise NoGPU("no CUDA GPU here (numba.cuda.is_available() is False): run without "
                     "--device cuda, or on a machine with an NVIDIA GPU and "
                     "pip install -e '.[gpu]'")
-    dev = cuda.get_current_device()
-    name = dev.name.decode() if isinstance(dev.name, bytes) else str(dev.name)
-    return f"{name} (cc {dev.compute_capability[0]}.{dev.compute_capability[1]})"
+    try:
+        dev = cuda.get_current_device()
+        name = dev.name.decode() if isinstance(dev.name, bytes) else str(dev.name)
+        major, minor = dev.compute_capability
+    except Exception as exc:   # noqa: BLE001 -- a driver that lists a GPU it cannot open
+        raise NoGPU(f"a CUDA GPU is listed but cannot be opened ({type(exc).__name__}: "
+                    f"{exc}); run without --device cuda, or check the driver (nvidia-smi)"
+                    ) from None
+    return f"{name} (cc {major}.{minor})"
 
 
 def unsupported(scene) -> str | None:

@@ -140,6 +140,24 @@ def test_without_a_gpu_the_cuda_device_is_one_clear_error():
         dataclasses.replace(settings, device="gpu")
 
 
+def test_a_gpu_the_driver_lists_but_cannot_open_is_one_clear_error(monkeypatch):
+    """``is_available()`` True, ``get_current_device()`` failing (a driver or container
+    mismatch): before, the exception went up as it was (``submit``: "internal error", exit
+    1); now NoGPU, which ``submit --device cuda`` turns into one line, exit 2."""
+    if gpu.simulated():
+        pytest.skip("this process runs under the CUDA simulator")
+    from numba import cuda
+
+    def cannot_open():
+        raise RuntimeError("CUDA_ERROR_NO_DEVICE")
+
+    monkeypatch.setattr(cuda, "is_available", lambda: True)
+    monkeypatch.setattr(cuda, "get_current_device", cannot_open)
+    with pytest.raises(gpu.NoGPU, match=r"listed but cannot be opened \(RuntimeError: "
+                                        r"CUDA_ERROR_NO_DEVICE\); run without --device cuda"):
+        gpu.check_device()
+
+
 def test_what_stays_on_the_cpu_says_why():
     assert gpu.unsupported(scene(integrator="rk4")) is None
     assert "runs on the CPU only" in gpu.unsupported(scene(integrator="rosenbrock"))
