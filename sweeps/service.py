@@ -237,7 +237,7 @@ class _Server:
 
         sweep_id = plan.sweep_id
         self.say(f"serve: running {sweep_id} '{plan.spec.name}': {plan.n_points} points in "
-                 f"{len(plan.blocks)} blocks" + (plan.device_note and f"; {plan.device_note}"))
+                 f"{len(plan.blocks)} blocks")
         try:
             if plan.path == "simulate":
                 self.compute.open()

@@ -1,7 +1,7 @@
 """A spec asking for ``device = "cuda"`` whose scene the GPU cannot run (the averaged and
 harmonic-balance paths, the Rosenbrock solver: engine.gpu.unsupported) is the CPU's sweep:
-its id, its cube's spec, and a line saying so from every entry (the command line prints
-it; ``run_sweep`` warns; ``serve`` says it). Before, the Python API ran it on the CPU
+its id, its cube's spec, and a line saying so (the command line prints it, also before
+``--detach`` queues the CPU's sweep; ``run_sweep`` warns). Before, the Python API ran it on the CPU
 without a word under a sweep id of its own, its cube's spec saying ``"device": "cuda"``."""
 import json
 import warnings
