@@ -30,7 +30,7 @@ def test_run_sweep_warns_and_writes_the_cpu_cube(tmp_path):
     with pytest.warns(SpecWarning, match="this sweep runs on the CPU"):
         res = sweeps.run_sweep(SPEC, tmp_path / "store", device="cuda", progress=False)
     with warnings.catch_warnings():
-        warnings.simplefilter("error")   # the CPU's own request: no word
+        warnings.simplefilter("error", SpecWarning)   # the CPU's own request: no word
         again = sweeps.run_sweep(SPEC, tmp_path / "store", progress=False)
     assert again.sweep_id == res.sweep_id and res.state == "done"
     with sweeps.open_sweep(res.sweep_id, tmp_path / "store") as ds:
