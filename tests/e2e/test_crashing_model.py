@@ -76,15 +76,24 @@ omega = [100.0]
 '''
 
 
-def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the_rest(tmp_path):
-    (tmp_path / "crashlab.py").write_text(textwrap.dedent(LAW))
+@pytest.fixture(scope="module")
+def crashlab(tmp_path_factory):
+    """The crashing law's module, in one folder for the module's tests: its kernels are
+    cached by their file's path, so the tests compile it once, not once each."""
+    folder = tmp_path_factory.mktemp("crashlab")
+    (folder / "crashlab.py").write_text(textwrap.dedent(LAW))
+    return folder
+
+
+def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the_rest(
+        tmp_path, crashlab):
     spec = tmp_path / "crash.toml"
     spec.write_text(SPEC)
     store = tmp_path / "cubes"   # (not "store": on PYTHONPATH it would hide the package)
     # dask's allowed-failures 1 (default 3): a crashing block is given up after 2 worker
     # deaths, not 4 -- the same counting (sweeps.workers.deaths reads the setting), half the
     # worker restarts (85 s of this test in CI before)
-    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg",
+    env = {**os.environ, "PYTHONPATH": str(crashlab), "MPLBACKEND": "Agg",
            "DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES": "1"}
     # crashes at W = 0.2 and 1, and would at the workers' warm-up point (W = 0.1): the
     # kernel of a brought model is compiled there on no point at all
@@ -160,14 +169,13 @@ def test_a_law_that_loops_for_ever_fails_its_block_in_one_line_and_keeps_the_res
     (-1.0, "friction 'crashlab:Crasher' on system 'slider': the process running it died"),
     (0.5, "crashlab:Crasher (the time estimate's sample points): the process running it died"),
 ])
-def test_plan_of_a_law_that_crashes_is_one_line_exit_2(tmp_path, crash_at, where):
+def test_plan_of_a_law_that_crashes_is_one_line_exit_2(tmp_path, crashlab, crash_at, where):
     """At the spec's first-step check (crash_at < 0: every point crashes) and at the time
     estimate's sample points (W = 1 is one of them): before, ``ditherlab plan`` died with a
     segmentation fault (exit 139, not a line); now the user code runs in a child process."""
-    (tmp_path / "crashlab.py").write_text(textwrap.dedent(LAW))
     spec = tmp_path / "crash.toml"
     spec.write_text(SPEC + f"[params]\ncrash_at = {crash_at}\n")
-    env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg"}
+    env = {**os.environ, "PYTHONPATH": str(crashlab), "MPLBACKEND": "Agg"}
     out = ditherlab("plan", spec, env=env, timeout=300)
     assert out.returncode == 2, (out.returncode, out.stdout, out.stderr[-3000:])
     lines = [ln for ln in out.stderr.splitlines() if ln.strip()]

@@ -6,7 +6,9 @@ run them all. Compiling a scene's CPU kernels is what a case costs (~15-45 s on 
 so a case takes another test's scene wherever it can (one compilation in a CI run for both):
 the cases with every observable are test_engine_vs_scipy's scenes (tests.engine.common;
 :data:`SHARED`), the GMS, Dahl and servo cases test_models_reference's and
-test_models_servo's; the others ask for few outputs. ``scripts/compile_costs.py --scenes``
+test_models_servo's (the Dahl case its undithered ``dahl-a2``, the only case without
+dither), the LuGre case without Stribeck effect or bristle damping the LuGre side of its
+Dahl identity (the viscous term off: the contact case); the others ask for few outputs. ``scripts/compile_costs.py --scenes``
 lists which module compiles which scene.
 """
 from __future__ import annotations
@@ -38,18 +40,18 @@ CASES = {
                                    SLIDER_POINTS, 0.5),
     "lugre-sine-force-rk4": ("lugre", "slider", "sine-force", "rk4", {}, FEW, {},
                              SLIDER_POINTS, 0.5),
-    "lugre-none-dopri5-no-effects": ("lugre", "slider", "none", "dopri5", {},
-                                     ("v_mean", "F_mean", "stick_fraction"),
-                                     {"sigma1": 0.0, "sigma2": 0.0, "fs": 1.0, "fc": 1.0},
-                                     SLIDER_POINTS, 2.0),
+    "lugre-sine-velocity-dopri5-no-effects": ("lugre", "slider", "sine-velocity", "dopri5",
+                                              {}, ("v_mean", "F_mean", "v_slow_p2p",
+                                                   "stick_fraction"),
+                                              {"sigma1": 0.0, "fs": 1.0}, SLIDER_POINTS, 2.0),
     "elastoplastic-square-slow-dopri5": ("elastoplastic", "slider", "square-velocity",
                                          "dopri5", {}, ALL, SLOW, SLIDER_POINTS, 0.5),
     "stribeck-sine-force-dopri5": ("stribeck", "slider", "sine-force", "dopri5", {}, ALL, {},
                                    SLIDER_POINTS, 0.5),
     "coulomb-square-rk4": ("coulomb", "slider", "square-velocity", "rk4", {},
                            ("v_mean", "stick_fraction"), {}, SLIDER_POINTS, 0.5),
-    "dahl-sine-velocity-dopri5": ("dahl", "slider", "sine-velocity", "dopri5", {},
-                                  ("v_mean", "F_mean"), {"sigma1": 0.0}, SLIDER_POINTS, 0.5),
+    "dahl-none-dopri5": ("dahl", "slider", "none", "dopri5", {"dahl_alpha": 2.0},
+                         ("v_mean", "F_mean"), {"sigma1": 0.0}, SLIDER_POINTS, 0.5),
     "gms-sine-velocity-dopri5": ("gms", "slider", "sine-velocity", "dopri5", GMS,
                                  ("v_mean", "F_mean"), {"sigma1": 0.0}, SLIDER_POINTS, 0.5),
     "gms-servo-sine-velocity-dopri5": ("gms", "servo", "sine-velocity", "dopri5", GMS,

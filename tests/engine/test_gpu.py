@@ -116,6 +116,24 @@ def test_a_point_whose_thread_wrote_no_status_reads_failed_not_ok():
     assert got == {"status": [S.FAILED] * n, "all_nan": True}, got
 
 
+def test_the_cases_cover_every_builtin_law_system_dither_and_gpu_method():
+    """What the cases must cover (tests/engine/gpu_cases.py), held as they are changed to
+    share another test's scene: each built-in law, system and dither kind, both methods a
+    GPU runs, each effect flag off once, a vector-parameter law and a brought model."""
+    from engine.dither import KINDS
+    from engine.registry import LAW_NAMES, SYSTEM_NAMES, is_import_path
+
+    scenes = [build(case_id)[0] for case_id in CASES]
+    assert {s.friction for s in scenes} >= set(LAW_NAMES)
+    assert {s.system for s in scenes} >= set(SYSTEM_NAMES)
+    assert {s.dither for s in scenes} >= set(KINDS)
+    assert {s.integrator for s in scenes} >= {"rk4", "dopri5"}
+    for flag in ("stribeck", "bristle_damping", "viscous"):
+        assert any(not getattr(s, flag) for s in scenes), flag
+    assert any(s.sizes and max(n for _, n in s.sizes) > 1 for s in scenes)
+    assert any(is_import_path(s.friction) for s in scenes)
+
+
 @pytest.mark.parametrize("integrator", ["rk4", "dopri5"])
 def test_the_gpu_scratch_mirrors_the_cpu_scratch(integrator):
     pk = point_kernel(scene(integrator=integrator))

@@ -28,8 +28,15 @@ def _servo(W, omega, record_dt=None):
     return r
 
 
-def test_without_dither_the_servo_hunts_and_its_outputs_read_the_trajectory():
-    r = _servo(0.0, 0.0, record_dt=0.01)
+@pytest.fixture(scope="module")
+def hunting():
+    """The undithered servo, its trajectory recorded every 0.01 (both tests: one kernel,
+    one run; recording leaves the outputs alone, tests/engine/test_engine_sampling.py)."""
+    return _servo(0.0, 0.0, record_dt=0.01)
+
+
+def test_without_dither_the_servo_hunts_and_its_outputs_read_the_trajectory(hunting):
+    r = hunting
     e = 1.0 - r.y[:, 0]                     # x_ref = 1, v_ref = 0
     t = r.t
     amp = 0.5 * (e.max() - e.min())
@@ -50,8 +57,8 @@ def test_without_dither_the_servo_hunts_and_its_outputs_read_the_trajectory():
     assert r.outputs["steady_error"] == pytest.approx(rms, rel=1e-3)
 
 
-def test_dither_quenches_the_hunting():
-    hunting = _servo(0.0, 0.0).outputs
+def test_dither_quenches_the_hunting(hunting):
+    hunting = hunting.outputs
     quenched = _servo(0.8, 30.0).outputs
     assert quenched["hunt_amplitude"] < 1e-3 * hunting["hunt_amplitude"]
     assert quenched["steady_error"] < 1e-3 * hunting["steady_error"]

@@ -14,10 +14,12 @@ from sweeps.planning.plan import make_plan
 from sweeps.run.phases import shown
 from sweeps.run.submit import submit
 from sweeps.spec import parse_spec
+from tests.helpers import SIMULATE_OUTPUTS
 
-# 8 points in 4 blocks of 2: a few seconds once the kernel is in the disk cache
+# 8 points in 4 blocks of 2: a few seconds once the kernel is in the disk cache (the e2e
+# spec's outputs: its Scene, one compilation for both)
 SPEC = {"name": "phases", "friction": "lugre", "dither": "square-velocity",
-        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
+        "method": "simulate", "outputs": list(SIMULATE_OUTPUTS), "accuracy": "draft",
         "block_size": 2, "time": {"t_end": 12.0, "t_transient": 4.0},
         "grid": {"W": [0.0, 0.2, 0.4, 0.6], "omega": [300.0, 1000.0], "v_ref": [0.4],
                  "v_d": [0.1]}}
