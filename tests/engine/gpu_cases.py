@@ -8,8 +8,8 @@ the cases with every observable are test_engine_vs_scipy's scenes (tests.engine.
 :data:`SHARED`), the GMS, Dahl and servo cases test_models_reference's and
 test_models_servo's (the Dahl case its undithered ``dahl-a2``, the only case without
 dither), the LuGre case without Stribeck effect or bristle damping the LuGre side of its
-Dahl identity (the viscous term off: the contact case); the others ask for few outputs. ``scripts/compile_costs.py --scenes``
-lists which module compiles which scene.
+Dahl identity (the viscous term off: the contact case); the others ask for few outputs.
+``scripts/compile_costs.py --scenes`` lists which module compiles which scene.
 """
 from __future__ import annotations
 

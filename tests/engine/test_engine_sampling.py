@@ -25,6 +25,9 @@ METHODS = {
     "rodas4": (Settings(rtol=1e-10, atol=1e-12), 1e-6),
     "rk4": (Settings(h=1e-3, steps_per_period=256), 1e-4),   # sine: h = 2 pi / (30 * 256)
 }
+# the output of test_engine_vs_scipy's undithered LuGre scene: the plain DP5 kernel below is
+# its kernel (one compilation in a CI run for both; the sampled kernels are this module's)
+OUTS = ("F_mean",)
 CASES = [  # dither, parameters: stick-slip without dither (|u| = 0 kinks), and a sine
     ("none", {"v_ref": 0.4}),
     ("sine-velocity", {"v_ref": 0.4, "W": 0.3, "omega": 30.0}),
@@ -37,7 +40,7 @@ CASES = [  # dither, parameters: stick-slip without dither (|u| = 0 kinks), and 
 def test_samples_match_reference_at_instants(method, dither, kw):
     settings, tol = METHODS[method]
     p = P.pack(t_end=T_END, **kw)
-    sc = scene("lugre", dither, integrator=method, outputs=("v_mean",))
+    sc = scene("lugre", dither, integrator=method, outputs=OUTS)
     r = simulate(sc, p, settings, record_dt=DT, record_from=T_FROM)
     assert r.status == 0
     k = np.arange(np.ceil(T_FROM / DT), np.floor(T_END / DT) + 1)
@@ -52,7 +55,7 @@ def test_samples_match_reference_at_instants(method, dither, kw):
 def test_sampling_does_not_touch_the_trajectory(method):
     settings, _ = METHODS[method]
     p = P.pack(t_end=T_END, v_ref=0.4)
-    sc = scene("lugre", "none", integrator=method, outputs=("v_mean",))
+    sc = scene("lugre", "none", integrator=method, outputs=OUTS)
     plain = simulate(sc, p, settings)
     sampled = simulate(sc, p, settings, record_dt=0.0123)
     assert (sampled.steps, sampled.rejected, sampled.evals) == \
@@ -63,7 +66,7 @@ def test_sampling_does_not_touch_the_trajectory(method):
 
 def test_record_dt_must_be_positive():
     with pytest.raises(ValueError, match="record_dt must be > 0"):
-        simulate(scene("lugre", "none", outputs=("v_mean",)), P.pack(t_end=1.0), record_dt=0.0)
+        simulate(scene("lugre", "none", outputs=OUTS), P.pack(t_end=1.0), record_dt=0.0)
 
 
 def test_instant_at_t_end_is_kept_despite_rounding_and_bad_dt_samples_nothing():
@@ -73,7 +76,7 @@ def test_instant_at_t_end_is_kept_despite_rounding_and_bad_dt_samples_nothing():
     from engine.integrators.problem import CTR_NREC, CTR_SIZE
     from engine.kernels import make_config, point_kernel
 
-    sc = scene("lugre", "none", outputs=("v_mean",))
+    sc = scene("lugre", "none", outputs=OUTS)
     r = simulate(sc, P.pack(t_end=0.3, v_ref=0.4), record_dt=0.1)
     assert len(r.t) == 4 and r.t[-1] == 3 * 0.1
     np.testing.assert_array_equal(r.y[-1], r.y_end)

@@ -31,7 +31,9 @@ def _servo(W, omega, record_dt=None):
 @pytest.fixture(scope="module")
 def hunting():
     """The undithered servo, its trajectory recorded every 0.01 (both tests: one kernel,
-    one run; recording leaves the outputs alone, tests/engine/test_engine_sampling.py)."""
+    one run). Sampling at instants takes no steps of its own (its steps, evaluations and
+    end state are the plain run's, tests/engine/test_engine_sampling.py), and the second
+    test compares outputs by factors of 1e3."""
     return _servo(0.0, 0.0, record_dt=0.01)
 
 

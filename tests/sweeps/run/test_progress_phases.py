@@ -1,9 +1,9 @@
 """The progress display names each phase of a submit (issue 27): the points, with the error
 estimate's finer re-runs counted ``k/N`` beside them (they run among the blocks, issue 37)
 and on a bar of their own if some are left after the points, then publishing the cube; it
-no longer sits at "99 %" while the estimate runs unmentioned (a 100-point draft Fig. 14 sweep showed 95 % for
-13 s, then 100 % for 6 s more). Checked on the sequence of states the display went
-through (tqdm redraws with a carriage return), not on their timing.
+no longer sits at "99 %" while the estimate runs unmentioned (a 100-point draft Fig. 14
+sweep showed 95 % for 13 s, then 100 % for 6 s more). Checked on the sequence of states the
+display went through (tqdm redraws with a carriage return), not on their timing.
 
 Here a quiet run and the bars' redraw; a submit's phases in order, on threads and on a
 local cluster: tests/e2e/test_progress_phases.py."""
