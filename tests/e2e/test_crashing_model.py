@@ -89,7 +89,7 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
         tmp_path, crashlab):
     spec = tmp_path / "crash.toml"
     spec.write_text(SPEC)
-    store = tmp_path / "cubes"   # (not "store": on PYTHONPATH it would hide the package)
+    store = tmp_path / "cubes"
     # dask's allowed-failures 1 (default 3): a crashing block is given up after 2 worker
     # deaths, not 4 -- the same counting (sweeps.workers.deaths reads the setting), half the
     # worker restarts (85 s of this test in CI before)

@@ -60,13 +60,18 @@ for case_id in sys.argv[1:]:
 """
 
 
+def _simulator_env() -> dict:
+    """A child's environment: numba's CUDA simulator on (read at numba's import), this
+    checkout first on the path."""
+    return {**os.environ, "NUMBA_ENABLE_CUDASIM": "1",
+            "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+
+
 @pytest.fixture(scope="module")
 def simulated():
     """Every case through the simulator in one child: ``(case -> its line, the child)``."""
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1",
-           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", CHILD, *sorted(CASES)], capture_output=True,
-                          text=True, env=env, cwd=ROOT, timeout=2400)
+                          text=True, env=_simulator_env(), cwd=ROOT, timeout=2400)
     lines = [json.loads(ln) for ln in proc.stdout.splitlines() if ln.startswith("{")]
     return {got["case"]: got for got in lines}, proc
 
@@ -106,10 +111,8 @@ print(json.dumps({"status": status.tolist(), "all_nan": bool(np.isnan(out).all()
 def test_a_point_whose_thread_wrote_no_status_reads_failed_not_ok():
     """Before, the status array went to the GPU as zeros (OK): a brought model's ``raise``
     left its points OK with NaN outputs. Now FAILED until the thread writes the status."""
-    env = {**os.environ, "NUMBA_ENABLE_CUDASIM": "1",
-           "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
     proc = subprocess.run([sys.executable, "-c", SILENT], capture_output=True, text=True,
-                          env=env, cwd=ROOT, timeout=300)
+                          env=_simulator_env(), cwd=ROOT, timeout=300)
     assert proc.returncode == 0, proc.stderr[-3000:]
     got = json.loads(proc.stdout)
     n = len(build("lugre-square-rk4")[2])   # the case's points (tests/engine/gpu_cases.py)
