@@ -13,7 +13,7 @@ import numpy as np
 
 from . import params as P
 from . import status as S
-from .jit import compile_once
+from .jit import compile_once, load_numba_registries
 from .kernels import block_kernel, make_config, point_kernel
 from .observables import N_HIST
 from .scene import ANALYSIS_PATHS, Scene
@@ -98,6 +98,7 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
 def _analysis(scene: Scene, points: np.ndarray, p: np.ndarray) -> BlockResult:
     """Averaged / harmonic-balance paths (engine.analysis, no time integration)."""
     from .analysis.block import analysis_block  # lazy: written by the analysis package
+    load_numba_registries()   # (before its kernels load from the cache)
 
     m = points.shape[0]
     t0 = time.perf_counter()

@@ -35,6 +35,7 @@ import contextlib
 import hashlib
 import os
 import secrets
+import sys
 import threading
 from pathlib import Path
 
@@ -109,6 +110,38 @@ def _helpers_per_fastmath() -> None:
 
 
 _helpers_per_fastmath()
+
+
+_REGISTRIES = threading.Lock()
+
+
+def _blas_is_scipys() -> None:
+    """numba.np.arraymath's BLAS probe, answered: scipy (a dependency) carries one."""
+
+
+def load_numba_registries() -> None:
+    """Load numba's CPU typing and target registries now, as numba does at a process's
+    first compile or kernel-cache load, less one probe: importing numba.np.arraymath asks
+    whether a BLAS exists by importing scipy.linalg, 0.35 s of the 0.6 s load here, in
+    every process that runs a kernel (a ``submit``, each pytest worker, a dask worker's
+    fork server; issue 37's warm cheap sweep took 1.9 s in all). ditherlab depends on
+    scipy, so the answer is yes. Only that import-time probe is answered: numba's own
+    ``ensure_blas`` is back before this returns, and the linear algebra that a brought law
+    may call imports scipy.linalg when it is typed, as before. Nothing changes in a
+    kernel (tests/engine/test_registries.py); a no-op once numba has loaded them."""
+    with _REGISTRIES:
+        if "numba.np.arraymath" in sys.modules:
+            return
+        from numba.core.registry import cpu_target
+        from numba.np import linalg
+
+        probe = linalg.ensure_blas
+        linalg.ensure_blas = _blas_is_scipys
+        try:
+            cpu_target.typing_context.refresh()
+            cpu_target.target_context.refresh()
+        finally:
+            linalg.ensure_blas = probe
 
 
 _STABLE = (bool, int, float, complex, str, bytes, type(None))
@@ -238,5 +271,6 @@ def compile_once(dispatcher, args: tuple, scene) -> None:
     sig = tuple(dispatcher.typeof_pyval(a) for a in args)
     if sig in dispatcher.overloads:
         return
+    load_numba_registries()
     with compile_lock(scene):
         dispatcher.compile(sig)

@@ -20,10 +20,14 @@ scene = Scene(friction="lugre", dither="square-velocity", integrator="rk4", slow
 t0 = time.perf_counter()
 res = run_block(scene, np.array([[0.4, 1000.0, 0.4, 0.1]]), P.pack(t_end=0.5), Settings())
 kernel = block_kernel(scene)
+import sys, numba.np.arraymath, numba.np.linalg
 print(json.dumps({"hits": sum(kernel.stats.cache_hits.values()),
                   "misses": sum(kernel.stats.cache_misses.values()),
                   "v_mean": float(res.outputs["v_mean"][0]),
-                  "seconds": time.perf_counter() - t0}))
+                  "seconds": time.perf_counter() - t0,
+                  "scipy.linalg": "scipy.linalg" in sys.modules,
+                  "blas": numba.np.arraymath._HAVE_BLAS,
+                  "probe": numba.np.linalg.ensure_blas.__module__}))
 """
 
 
@@ -42,6 +46,9 @@ def test_second_process_loads_the_kernel_from_disk(tmp_path):
     assert second["hits"] == 1 and second["misses"] == 0
     assert second["v_mean"] == first["v_mean"]          # the same machine code, bit for bit
     assert list(tmp_path.glob("numba-*"))               # the cache lives where we said
+    for run in (first, second):   # compiled, then loaded: numba's BLAS probe answered, not
+        # run (engine.jit.load_numba_registries), and numba's own probe back in place
+        assert (run["scipy.linalg"], run["blas"], run["probe"]) == (False, True, "numba.np.linalg")
 
 
 def test_distinct_closures_get_distinct_uuids():
