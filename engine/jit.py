@@ -127,21 +127,25 @@ def load_numba_registries() -> None:
     fork server; issue 37's warm cheap sweep took 1.9 s in all). ditherlab depends on
     scipy, so the answer is yes. Only that import-time probe is answered: numba's own
     ``ensure_blas`` is back before this returns, and the linear algebra that a brought law
-    may call imports scipy.linalg when it is typed, as before. Nothing changes in a
-    kernel (tests/engine/test_registries.py); a no-op once numba has loaded them."""
+    may call imports scipy.linalg when it is compiled, as before. Nothing changes in a
+    kernel (tests/engine/test_registries.py); a no-op once numba has loaded them. numba
+    internals (pinned in pyproject.toml): if the probe moves, numba runs it (slower, the
+    same registries)."""
     with _REGISTRIES:
         if "numba.np.arraymath" in sys.modules:
             return
         from numba.core.registry import cpu_target
         from numba.np import linalg
 
-        probe = linalg.ensure_blas
-        linalg.ensure_blas = _blas_is_scipys
+        probe = getattr(linalg, "ensure_blas", None)
+        if probe is not None:
+            linalg.ensure_blas = _blas_is_scipys
         try:
             cpu_target.typing_context.refresh()
             cpu_target.target_context.refresh()
         finally:
-            linalg.ensure_blas = probe
+            if probe is not None:
+                linalg.ensure_blas = probe
 
 
 _STABLE = (bool, int, float, complex, str, bytes, type(None))
