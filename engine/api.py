@@ -13,7 +13,7 @@ import numpy as np
 
 from . import params as P
 from .integrators.problem import CTR_EVALS, CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS
-from .jit import compile_once
+from .jit import compile_once, load_numba_registries
 from .kernels import make_config, point_kernel
 from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
@@ -91,6 +91,7 @@ def simulate(scene: Scene, p, settings: Settings | None = None, *, record: bool 
         raise ValueError(f"record_dt must be > 0 (time units), got {record_dt}")
     sampled = record_dt is not None
     record = record or sampled
+    load_numba_registries()   # (before pk.alloc, numba's first compile here)
     pk = point_kernel(scene, sampled_record=sampled)
     cfg = make_config(settings or Settings(), record_every, record_dt or 0.0, record_from)
     y, obs = np.empty(pk.n), np.empty(pk.obs_size)
