@@ -20,8 +20,9 @@ print(json.dumps({**got, "scipy.linalg": "scipy.linalg" in sys.modules,
 """
 
 ENTRIES = {
-    # one trajectory of test_engine_sampling's (and test_engine_vs_scipy's) point kernel:
-    # its first compile was numba's own, of the kernel's allocator
+    # one trajectory of test_engine_sampling's (and test_engine_vs_scipy's) point kernel
+    # (before, simulate's first compile was numba's own, of the kernel's allocator: the
+    # probe ran)
     "simulate": """
 from engine import params as P
 from engine.api import simulate
@@ -83,5 +84,5 @@ def test_brought_linear_algebra_still_finds_scipys_blas():
     assert got["before"] is False and got["scipy.linalg"] is True
     assert got["dot"] == got["vdot"] == got["numpy"][0] == 8.5   # 0.5 - 4 + 12
     assert got["correlate"] == got["numpy"][1] == [8.5]
-    assert got["solve"] == [0.5, -1.0, 4.0 / 3.0]
+    assert got["solve"] == [0.5, -1.0, 4.0 / 3.0]   # diag(a) x = b: x = b / a
     assert got["blas"] is True and got["probe"] == got["arraymath's probe"] == "numba.np.linalg"
