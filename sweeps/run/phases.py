@@ -11,6 +11,7 @@ display is off the computing path (sweeps.version), and its wording can change f
 from __future__ import annotations
 
 import functools
+import os
 import sys
 import time
 
@@ -28,7 +29,19 @@ def bar(plan, phase: str, total: int, unit: str, enabled: bool, initial: int = 0
     return _bar_class()(total=total, unit=unit,
                         desc=f"{plan.spec.name} [{plan.sweep_id}] {phase}",
                         disable=not enabled, mininterval=MININTERVAL_S, miniters=1,
-                        initial=initial)
+                        initial=initial, **unsized())
+
+
+def unsized() -> dict:
+    """tqdm's size for a terminal that answers 0 columns and rows (a pty nobody sized:
+    ``script``'s, some CI runners'): 80 x 20. tqdm took those zeros as a width of 0 and a
+    last row of -1, and drew nothing at all, not even the phase's name, for a whole sweep.
+    Elsewhere nothing: tqdm asks the terminal (or takes its defaults off one)."""
+    try:
+        size = os.get_terminal_size(sys.stderr.fileno())
+    except (AttributeError, OSError, ValueError):   # not a terminal
+        return {}
+    return {} if size.columns > 0 and size.lines > 0 else {"ncols": 80, "nrows": 20}
 
 
 @functools.cache
@@ -74,7 +87,7 @@ class Timer:
             return
         if self._bar is None:
             self._bar = _bar_class()(desc=self.desc, bar_format="{desc}: {elapsed}",
-                                     mininterval=MININTERVAL_S)
+                                     mininterval=MININTERVAL_S, **unsized())
         self._bar.keep_alive()
 
     def close(self) -> None:

@@ -70,3 +70,33 @@ def test_a_bar_left_still_is_redrawn_while_work_goes_on(capfd):
     assert len(states) >= 2 and all(s.startswith("starting a local cluster of 2 workers: ")
                                     for s in states), states
     bar.close()
+
+
+def test_a_terminal_of_zero_columns_still_shows_the_phases(monkeypatch):
+    """A pty nobody sized (``script``'s, some CI runners') answers 0 columns; tqdm then
+    drew nothing, not even the phase's name, for a whole sweep (seen with ``script -q -c
+    'ditherlab submit ...'``: blank lines until the summary)."""
+    import fcntl
+    import os
+    import struct
+    import termios
+
+    from sweeps.run import phases
+
+    master, slave = os.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 0, 0, 0, 0))
+    with os.fdopen(slave, "w") as tty:
+        monkeypatch.setattr("sys.stderr", tty)
+        plan = make_plan(parse_spec(SPEC))
+        bar = phases.bar(plan, "points", plan.n_points, "point", True)
+        bar.update(3)
+        bar.close()
+        timer = phases.compiling(True)
+        timer()
+        timer.close()
+        tty.flush()
+        monkeypatch.undo()
+    text = os.read(master, 65536).decode()
+    os.close(master)
+    assert _states(text, plan)[-1].startswith("points:  38%"), text
+    assert "compiling the engine" in text
