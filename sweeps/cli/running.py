@@ -58,6 +58,10 @@ def cmd_submit(args) -> int:
           f"{res.n_failed} failed; {res.wall_s:.1f} s\ncube: {res.cube_path}")
     if res.message:
         print(f"{res.sweep_id}: {res.message}", file=sys.stderr)
+    from ..overview import cube_warnings   # (as status, query and map say them)
+
+    for warning in cube_warnings(res.cube_path):
+        print(f"ditherlab: warning: {warning}", file=sys.stderr)
     return 0 if res.state == "done" else EXIT_FAILED
 
 

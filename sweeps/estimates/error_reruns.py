@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import json
 import time
-from pathlib import Path
 
 import numpy as np
 
 from engine import status as S
+from store.atomic import atomic_write
 from store.record import BlockRecord
 
 from . import error_estimate as errest
@@ -21,6 +21,7 @@ from ..planning.plan import Plan, work_s
 
 ESTIMATE_FILE = "error_estimate.json"   # the sweep's error estimate (error_estimate.py)
 GATHER_TICK_S = 0.05   # how often the re-runs still running are looked at
+HARVEST_S = 1.0        # the longest harvest() waits for a finished re-run's result
 RESCUE_S = 2.0         # how often gather() looks for re-runs whose workers have all gone
 
 
@@ -43,7 +44,7 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
                                  f"({type(exc).__name__}: {exc}); submit again"]}
     errest.attach(cube, estimate)
     if estimate["compared_with"] is not None:
-        _write_json(sweep.root / ESTIMATE_FILE, estimate)
+        atomic_write(sweep.root / ESTIMATE_FILE, json.dumps(estimate).encode())
     timings["error_estimate_s"] = time.perf_counter() - t
 
 
@@ -171,6 +172,7 @@ class SampleRuns:
             if self.given_up:
                 self.cancel(client)
                 raise RuntimeError(self.given_up)
+            self.harvest()
             done = sum(f.done() for f in (self.futures[i] for i in range(len(self.order))))
             for _ in range(done - seen):
                 if tick is not None:
@@ -185,14 +187,64 @@ class SampleRuns:
             # same line as rescue's, not KilledWorker's text (as the dispatch does a block)
             self.cancel(client)
             raise RuntimeError(f"a re-run was given up: {crash_line(self.deaths.allowed + 1)}")
-        records = client.gather([f for f, _ in self.groups])
+        self.harvest()
+        records = [f.result() for f, _ in self.groups]   # (all taken: none erred)
         of_rerun = {}
         for (_, group), record in zip(self.groups, records):
             of_rerun.update(zip(group, record.split([1] * len(group))))
         return BlockRecord.concatenate([of_rerun[i] for i in range(len(self.order))])
 
+    def take(self, future, record) -> bool:
+        """Hold the result of a re-run task that finished (the dispatch's ``as_completed``
+        fetched it) and let the task go: a worker that left (a brought model that hung:
+        sweeps.workers.task) took the results still wanted of it, to be computed again,
+        and one that hung again ended the next worker. False: not one of this sample's."""
+        for g, (task_, group) in enumerate(self.groups):
+            if task_ is future:
+                if _succeeded(future):
+                    self.allowed.pop(future, None)
+                    self.groups[g] = (_Taken(record), group)
+                    self.futures.update((i, self.groups[g][0]) for i in group)
+                return True
+        return False
+
+    def harvest(self) -> None:
+        """:meth:`take` every re-run task that finished, fetching its result (at most
+        HARVEST_S each: one whose worker left meanwhile is computed again)."""
+        for future, _ in list(self.groups):
+            if not isinstance(future, _Taken) and _succeeded(future):
+                try:
+                    self.take(future, future.result(timeout=HARVEST_S))
+                except TimeoutError:
+                    continue
+
     def cancel(self, client) -> None:
-        client.cancel([f for f, _ in self.groups])
+        client.cancel([f for f, _ in self.groups if not isinstance(f, _Taken)])
+
+
+class _Taken:
+    """A finished re-run task whose result the submitter holds (:meth:`SampleRuns.take`)."""
+    status = "finished"
+
+    def __init__(self, record: BlockRecord):
+        self.record = record
+
+    def done(self) -> bool:
+        return True
+
+    def result(self) -> BlockRecord:
+        return self.record
+
+
+def _succeeded(future) -> bool:
+    """A dask future or a thread's ``concurrent.futures.Future`` that has its result (not
+    running, lost with its worker, erred or cancelled)."""
+    if not future.done():
+        return False
+    status = getattr(future, "status", None)
+    if status is not None:
+        return status == "finished"
+    return not future.cancelled() and future.exception() is None
 
 
 def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
@@ -217,18 +269,6 @@ def _error_estimate(plan: Plan, client, cube, started: SampleRuns | None = None,
 
             result = runs.gather(client, tick=tick, idle=getattr(bar, "keep_alive", None))
     return errest.compare(plan, cube, index, result, finer.label)
-
-
-def _write_json(path: Path, data: dict) -> None:
-    """Write ``data`` as JSON atomically (temporary name, fsync, rename)."""
-    import os
-
-    tmp = path.with_name(path.name + f".tmp{os.getpid()}")
-    with open(tmp, "w") as f:
-        json.dump(data, f)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
 
 
 def complete(cube) -> bool:

@@ -178,19 +178,22 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             continue
         finished, given_up = [], []
         for f, result in done.next_batch(block=False):
-            if f in inflight:   # (not: cancelled and submitted again)
-                group = inflight.pop(f)[0]
-                if deaths.counting and killed_worker(f):   # dask gave up: workers kept dying
-                    again, lost = deaths.requeue(group, deaths.allowed + 1)
-                    queue.extend(again)
-                    given_up += lost
-                    continue
-                result = f.result() if f.status == "error" else result   # an error raises
-                finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
-                if not result.error:   # (a failed block's cost_s is zeros: not a price)
-                    cost[0] += float(np.sum(result.cost_s))
-                    cost[1] += len(group)
-                    cost[2] += sum(cost_of[b] for b in group)
+            if f not in inflight:   # a re-run's result, held (or: cancelled, submitted again)
+                for runs in filter(None, (sample, filler)):
+                    runs.take(f, result)
+                continue
+            group = inflight.pop(f)[0]
+            if deaths.counting and killed_worker(f):   # dask gave up: workers kept dying
+                again, lost = deaths.requeue(group, deaths.allowed + 1)
+                queue.extend(again)
+                given_up += lost
+                continue
+            result = f.result() if f.status == "error" else result   # an error raises
+            finished += split_result(result, group, [len(plan.blocks[b]) for b in group])
+            if not result.error:   # (a failed block's cost_s is zeros: not a price)
+                cost[0] += float(np.sum(result.cost_s))
+                cost[1] += len(group)
+                cost[2] += sum(cost_of[b] for b in group)
         if finished:   # (not: only re-runs ended, which the estimate gathers)
             sink.many(finished)   # journaled as one group
             bar.update(sum(len(plan.blocks[b]) for b, _ in finished))

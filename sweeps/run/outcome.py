@@ -9,7 +9,10 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 import store
+from engine import status as S
 
 from .lease_holder import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
@@ -55,8 +58,7 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
         progress += ", before the error estimate"
     if counts["done_points"] == n and not unchecked:
         state = "partial" if counts["failed_points"] else "done"
-        message = (f"{counts['failed_points']} of {n} points failed or went non-finite "
-                   "(submit again to retry them)" if counts["failed_points"] else "")
+        message = failures_text(cube, plan.path) if counts["failed_points"] else ""
     elif stopped == SHUTDOWN:
         state = "queued"
         message = (f"re-queued after {progress}: serve {lease.owner} stopped; the next "
@@ -86,6 +88,28 @@ def final_result(plan, sweep, catalogue, cube, *, blocks_run, t0, timings, owner
     return SubmitResult(plan.sweep_id, sweep.cube, state, n, n_ok, counts["failed_points"],
                         blocks_run, len(plan.blocks), time.perf_counter() - t0, timings,
                         message=message)
+
+
+def failures_text(cube, path: str) -> str:
+    """``K of N points failed: ...`` with why, by cause, and what to do: the integrator gave
+    up (its step budget or step size: a stiff model), the state went non-finite, or the
+    point's whole block failed (a warning said why as it did). It ended "(submit again to
+    retry them)" whatever the cause, and a run again fails the same points."""
+    status = cube["status"].values
+    failed = (status != S.OK) & (status != S.NOT_COMPUTED)
+    gave_up = status == S.FAILED
+    if path != "simulate":   # (sweeps.planning: averaged, HBM ...: no integrator)
+        causes = [(gave_up, f"had no {path} solution (its method did not converge, or "
+                   "omega <= 0)")]
+    else:   # a whole block's failure journals no work: 0 right-hand-side evaluations
+        evals = cube["evals"].values
+        causes = [(gave_up & (evals > 0), "the integrator gave up (its step budget or step "
+                   "size: a stiff model? integrator = \"rodas4\")"),
+                  (gave_up & (evals == 0), "in blocks that failed (the warnings said why; "
+                   "submit again runs them again)")]
+    causes.append((status == S.NON_FINITE, "went non-finite (NaN or inf)"))
+    parts = [f"{int(np.sum(where))} {why}" for where, why in causes if np.any(where)]
+    return f"{int(np.sum(failed))} of {status.size} points failed: " + "; ".join(parts)
 
 
 def attached_result(plan, sweep, row, t0) -> SubmitResult:

@@ -73,7 +73,7 @@ def compute_block(scene, points: np.ndarray, p: np.ndarray, settings,
                        fingerprint=_fingerprint())
 
 
-EXIT_AFTER_S = 5.0   # a worker with a hung model's thread ends this long after its result
+LEAVE_WITHIN_S = 30.0   # a worker with a hung model's thread has left by then (else it exits)
 
 
 def watched(scene, points: np.ndarray, p: np.ndarray, settings):
@@ -83,9 +83,9 @@ def watched(scene, points: np.ndarray, p: np.ndarray, settings):
     first-step check ran another point) kept its worker busy for ever and the sweep's
     progress still (found by a review; nothing else ended it). It runs in a thread of its
     own here; past the limit this raises :class:`engine.user_code.ModelError` (the block is
-    FAILED in one warning line, the sweep goes on), and a dask worker ends itself
-    :data:`EXIT_AFTER_S` later, once its result is out, so that its nanny starts a fresh
-    one in place of the core the loop holds."""
+    FAILED in one warning line, the sweep goes on), and a dask worker leaves
+    (:func:`_leave_when_idle`), so that its nanny starts a fresh one in place of the core
+    the loop holds."""
     import threading
 
     from engine.blocks import run_block
@@ -103,7 +103,7 @@ def watched(scene, points: np.ndarray, p: np.ndarray, settings):
     thread.start()
     thread.join(limit)
     if thread.is_alive():
-        _end_worker_soon()
+        _leave_when_idle()
         raise ModelError(f"no result after {limit:g} s -- an endless loop in the model's "
                          f"kernels at these points? ({BLOCK_TIMEOUT_ENV} sets how long "
                          f"to wait)")
@@ -112,20 +112,48 @@ def watched(scene, points: np.ndarray, p: np.ndarray, settings):
     return box["result"]
 
 
-def _end_worker_soon() -> None:
-    """In a dask worker (not a submitter computing on threads): exit the process
-    :data:`EXIT_AFTER_S` from now; its nanny starts another."""
+def _leave_when_idle() -> None:
+    """In a dask worker (not a submitter computing on threads): start no other task, and
+    once the results this worker holds are taken, leave (dask's graceful close, whose nanny
+    starts a fresh worker); at the latest :data:`LEAVE_WITHIN_S` from now, exit.
+
+    It ended itself 5 s after a hung block instead, whatever it held. The next task it had
+    started by then died with it and counted as a crash; the results not yet taken (the
+    error estimate's re-runs) were computed again, and a re-run that hung again ended the
+    next worker. A 6-point sweep whose law loops at 2 points ended after 85 s, not 10, its
+    2 blocks given up as "4 worker processes died computing it" instead of "no result
+    after 10 s" (tests/e2e/test_crashing_model.py)."""
     import threading
 
     try:
         from distributed import get_worker
-        get_worker()
+        worker = get_worker()
     except (ImportError, ValueError):
         return
-    log.info("a brought model's block hung: this worker ends in %g s", EXIT_AFTER_S)
-    timer = threading.Timer(EXIT_AFTER_S, os._exit, args=(3,))
+    log.info("a brought model's block hung: this worker leaves once its results are taken")
+    worker.loop.add_callback(_leave, worker)   # (before this task's result is handled)
+    timer = threading.Timer(LEAVE_WITHIN_S, os._exit, args=(3,))   # (the loop stays)
     timer.daemon = True
     timer.start()
+
+
+_HELD = ("executing", "long-running", "memory")   # a task this worker runs, or its result
+
+
+async def _leave(worker) -> None:
+    """:func:`_leave_when_idle` on the worker's event loop: paused, the worker starts no
+    other task (one started now would die with this process and count as a crash); this
+    task ends, and the scheduler forgets its result once the submitter has taken it; then
+    retire (what is left moves to another worker, a queued task goes back, not counted as
+    a death) and close."""
+    import asyncio
+
+    from distributed.core import Status
+
+    worker.status = Status.paused
+    while any(ts.state in _HELD for ts in worker.state.tasks.values()):
+        await asyncio.sleep(0.1)
+    await worker.close_gracefully(restart=True, reason="ditherlab: a brought model hung")
 
 
 @functools.cache

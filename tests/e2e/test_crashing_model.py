@@ -134,19 +134,27 @@ LOOPING = LAW.replace("dy[Z + 100000000000] = 1.0", """k = 0.0
 def test_a_law_that_loops_for_ever_fails_its_block_in_one_line_and_keeps_the_rest(tmp_path):
     """A brought law that never returns at W > 0.05 (the spec's first-step check ran another
     point). Before, its workers computed for ever and the sweep's progress stood still;
-    now each such block is given up after $DITHERLAB_BLOCK_TIMEOUT_S (3 s here) in one
-    warning line, its worker ends and is started again, and the other points are kept."""
+    now each such block is given up after $DITHERLAB_BLOCK_TIMEOUT_S (6 s here) in one
+    warning line, its worker ends and is started again, and the other points are kept.
+
+    The worker leaves once the results it holds are taken, starting no other task. It
+    exited 5 s after the hung block instead: the task it had started by then died with it,
+    counted as a crash, and the error estimate's re-runs it held were computed again; a
+    6-point sweep hung at 2 points took 85 s, not 35, its blocks given up as "4 worker
+    processes died computing it". Here every block and re-run is computed once."""
     (tmp_path / "crashlab.py").write_text(textwrap.dedent(LOOPING))
     assert "while k >= 0.0" in LOOPING
     spec = tmp_path / "loop.toml"
     spec.write_text(SPEC.replace('"crash"', '"loop"') + "[params]\ncrash_at = 0.05\n")
     store = tmp_path / "cubes"
     env = {**os.environ, "PYTHONPATH": str(tmp_path), "MPLBACKEND": "Agg",
-           "DITHERLAB_BLOCK_TIMEOUT_S": "3"}
+           "DITHERLAB_BLOCK_TIMEOUT_S": "6", "DITHERLAB_BLOCK_LOG": str(tmp_path / "blocks")}
     out = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
     assert out.returncode == 1, (out.returncode, out.stdout, out.stderr[-3000:])
-    assert "Traceback" not in out.stderr, out.stderr
-    hung = [ln for ln in out.stderr.splitlines() if "no result after 3 s" in ln]
+    assert "Traceback" not in out.stderr and "died" not in out.stderr, out.stderr
+    computed = [line.split()[1] for line in (tmp_path / "blocks").read_text().splitlines()]
+    assert len(computed) == 6 and len(set(computed)) == 6, computed   # 3 blocks, 3 re-runs
+    hung = [ln for ln in out.stderr.splitlines() if "no result after 6 s" in ln]
     assert len(hung) == 2 and all(ln.startswith("ditherlab: warning: block ") and
                                   "DITHERLAB_BLOCK_TIMEOUT_S" in ln for ln in hung), out.stderr
     assert "2 of 3 points failed" in out.stderr

@@ -6,14 +6,17 @@ from __future__ import annotations
 
 import time
 
+import numpy as np
 import pytest
+import xarray as xr
 
 import store
+from engine import status as S
 from sweeps.api import run_sweep
 from sweeps.estimates.error_reruns import ESTIMATE_FILE, needs_estimate
 from sweeps.planning.plan import make_plan
 from sweeps.run.lease_holder import CANCELLED, SHUTDOWN, Lease
-from sweeps.run.outcome import final_result
+from sweeps.run.outcome import failures_text, final_result
 from sweeps.run.sink import done_blocks
 from sweeps.spec import parse_spec
 
@@ -163,3 +166,21 @@ def test_a_ctrl_c_before_the_final_state_is_recorded_leaves_the_row_resumable(tm
     assert (row["state"], row["owner"], row["done_blocks"]) == \
         ("cancelled", "", len(plan.blocks)), row
     assert run_sweep(SPEC, tmp_path, progress=False).state == "done"
+
+
+def test_the_failed_points_are_told_by_cause_with_what_to_do():
+    """The summary of a partial run says why its points failed and what to do. It ended
+    "(submit again to retry them)" whatever the cause: a stiff brought law that spent a
+    draft point's 50-million-step budget in 93 s said only that, and a second submit failed
+    the same points again (a newcomer's pass, 2026-11-29). A whole block's failure
+    journals no work (0 evaluations); the integrator that gave up did some."""
+    status = np.array([S.OK, S.FAILED, S.FAILED, S.NON_FINITE, S.FAILED, S.OK])
+    evals = np.array([10, 300_000_008, 0, 50, 0, 12])
+    cube = xr.Dataset({"status": ("p", status), "evals": ("p", evals)})
+    assert failures_text(cube, "simulate") == (
+        '4 of 6 points failed: 1 the integrator gave up (its step budget or step size: a '
+        'stiff model? integrator = "rodas4"); 2 in blocks that failed (the warnings said '
+        'why; submit again runs them again); 1 went non-finite (NaN or inf)')
+    assert failures_text(cube, "averaged") == (
+        "4 of 6 points failed: 3 had no averaged solution (its method did not converge, or "
+        "omega <= 0); 1 went non-finite (NaN or inf)")
