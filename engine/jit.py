@@ -42,7 +42,7 @@ from pathlib import Path
 import numba
 import numpy
 
-from . import cache_folders
+from . import cache_folders, kernel_cache
 from .provenance import cache_root, fingerprint
 
 
@@ -55,7 +55,9 @@ _ENGINE_CACHE: str | None = None   # numba's CACHE_DIR for the engine's kernels
 
 def _use_engine_cache_dir() -> None:
     """Point numba's cache at :func:`cache_dir` before any engine function is decorated
-    (the locator is chosen at decoration time). Unwritable -> numba's own default.
+    (the locator is chosen at decoration time), its files checked (engine.kernel_cache).
+    A folder that cannot be written: no disk cache, said once (numba fell back to each
+    source folder's ``__pycache__``, which no engine fingerprint names: stale kernels).
 
     :func:`njit` points it there again before each decoration: numba re-reads its whole
     configuration from the environment at the first compile after any ``NUMBA_*`` variable
@@ -68,9 +70,13 @@ def _use_engine_cache_dir() -> None:
     path = cache_dir()
     try:
         path.mkdir(parents=True, exist_ok=True)
-    except OSError:
+        os.close(os.open(probe := path / f".probe-{os.getpid()}", os.O_CREAT | os.O_WRONLY))
+        os.unlink(probe)
+    except OSError as exc:
+        kernel_cache.unwritable(str(path), exc)
         return
     cache_folders.use(path)
+    kernel_cache.install(str(path))
     _ENGINE_CACHE = numba.config.CACHE_DIR = str(path)
 
 
@@ -222,7 +228,7 @@ def njit(fn=None, *, refcount: bool = True, **options):
     time (50.8 -> 39.4 ns per right-hand-side evaluation on the fig10 benchmark, against
     34 ns for C). Allocation in such a kernel fails at compile time, never silently.
     """
-    options.setdefault("cache", True)
+    options["cache"] = options.get("cache", True) and _ENGINE_CACHE is not None   # (or none)
     options.setdefault("nogil", True)   # a block kernel lets other threads run (sweeps.run)
     if not refcount:
         options["_nrt"] = False
