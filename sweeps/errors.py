@@ -29,9 +29,17 @@ class AmbiguousSweepError(RefusedError, LookupError):
 
 
 class Interrupted(Exception):
-    """Ctrl-C, told with what was kept and how to resume."""
+    """Ctrl-C (or SIGTERM to ``submit``), told with what was kept and how to resume."""
 
     exit_status = EXIT_INTERRUPTED
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM to ``submit`` (a batch system's end of a job, ``kill``): the way of a Ctrl-C,
+    the journal kept and the sweep left to resume, one line (exit 143, 128 + SIGTERM). It
+    died of the signal instead, printing nothing, its row ``stalled``."""
+
+    exit_status = 143
 
 
 class InferredPointsWarning(UserWarning):

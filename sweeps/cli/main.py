@@ -180,7 +180,7 @@ def main(argv: list[str] | None = None) -> int:
         except (SpecError, ModelError) as exc:   # (a brought model's fault: a crash in plan)
             return _fail(exc, EXIT_REFUSED)
         except (UserError, Interrupted) as exc:
-            if exc.exit_status == EXIT_INTERRUPTED:
+            if isinstance(exc, Interrupted):   # (Ctrl-C or SIGTERM)
                 _quiet_finalizers()
             return _fail(exc, exc.exit_status)
         except KeyboardInterrupt:

@@ -25,7 +25,8 @@ def cmd_submit(args) -> int:
 
     from ..estimates.time_history import record_run
     from ..planning.plan import make_plan
-    from ..run.interrupt import remembered
+    from ..errors import Terminated
+    from ..run.interrupt import remembered, terminated_as_interrupt
     from ..run.phases import shown
     from ..run.submit import submit
 
@@ -42,11 +43,13 @@ def cmd_submit(args) -> int:
     if args.detach:
         return _submit_detached(plan, root)
     try:
-        with remembered():   # a Ctrl-C is never swallowed by a dask callback
+        with remembered(), terminated_as_interrupt():   # (never swallowed by dask)
             res = submit(plan, root, _compute(args), progress=shown(not args.quiet))
-    except KeyboardInterrupt:
-        raise Interrupted(f"interrupted; {_kept(plan, root)}; "
-                          "submit the spec again to resume") from None
+    except KeyboardInterrupt as exc:
+        how = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        stop = Interrupted(f"{how}; {_kept(plan, root)}; submit the spec again to resume")
+        stop.exit_status = getattr(exc, "exit_status", stop.exit_status)
+        raise stop from None
     except store.layout.NoSpaceError as exc:
         raise UserError(f"{exc}; {_kept(plan, root)}") from None
     record_run(root, plan, res)

@@ -95,11 +95,14 @@ class Plan:
         return math.prod(self.shape)
 
     def effects(self) -> dict[str, bool]:
-        """Effects compiled into the kernel (True) or left out (False)."""
+        """Effects compiled into the kernel (True) or left out (False). A brought law's
+        Stribeck curve and bristle damping are its own to name (its ``effects()``): the
+        plan listed the scene's flags, which such a law need not read, as compiled in."""
         s = self.scene
-        eff = {"stribeck": s.stribeck, "bristle damping": s.bristle_damping,
-               "viscous term": s.viscous, "slow force": s.slow_force,
-               "dither": s.dither != "none"}
+        eff = {} if registry.is_import_path(s.friction) else {
+            "stribeck": s.stribeck, "bristle damping": s.bristle_damping}
+        eff.update({"viscous term": s.viscous, "slow force": s.slow_force,
+                    "dither": s.dither != "none"})
         eff.update(hook(s.friction, "effects", registry.law(s.friction).effects, s))
         return eff
 

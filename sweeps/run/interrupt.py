@@ -58,3 +58,23 @@ def check() -> None:
     if _pressed.is_set():
         _pressed.clear()
         raise KeyboardInterrupt
+
+
+@contextmanager
+def terminated_as_interrupt():
+    """While inside (the main thread of ``ditherlab submit``), SIGTERM raises
+    :class:`sweeps.errors.Terminated`, a KeyboardInterrupt: the run stops as at a Ctrl-C."""
+    from ..errors import Terminated
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def terminate(signum, frame):
+        raise Terminated
+
+    previous = signal.signal(signal.SIGTERM, terminate)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)

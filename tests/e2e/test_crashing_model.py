@@ -102,10 +102,9 @@ def test_a_law_that_crashes_its_worker_fails_its_block_in_one_line_and_keeps_the
     out = ditherlab("submit", spec, "-q", store=store, env=env, timeout=300)
     assert out.returncode == 1, (out.returncode, out.stdout, out.stderr[-3000:])
     assert "Traceback" not in out.stderr and "Segmentation" not in out.stderr, out.stderr
-    crashed = [ln for ln in out.stderr.splitlines() if "worker processes died" in ln]
-    assert len(crashed) == 2, out.stderr
-    assert all(ln.startswith("ditherlab: warning: block ") and " failed: " in ln
-               for ln in crashed), out.stderr
+    crashed = [ln for ln in out.stderr.splitlines() if "worker processes died" in ln
+               and ln.startswith("ditherlab: warning: block ")]   # (not the estimate's)
+    assert len(crashed) == 2 and all(" failed: " in ln for ln in crashed), out.stderr
     assert "2 of 3 points failed" in out.stderr
 
     [cube_file] = store.glob("*/cube.nc")

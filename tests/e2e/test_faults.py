@@ -282,12 +282,16 @@ def test_a_damaged_catalogue_is_one_line_saying_how_to_rebuild_it(avg, tmp_path)
 
 
 @pytest.mark.long
+@pytest.mark.parametrize("sig, status, said", [(signal.SIGINT, 130, "interrupted"),
+                                               (signal.SIGTERM, 143, "terminated (SIGTERM)")])
 def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_file, env,
-                                                                gate):
+                                                                gate, sig, status, said):
     """SIGINT to the whole process group, as a terminal's Ctrl-C: exit 130, one line, no
     tracebacks from the dask workers; the next submit computes only the missing blocks.
     Two blocks are let through the gate and the rest held until the submitter has exited:
-    the Ctrl-C certainly comes mid-run, and it does not wait for the blocks still to run."""
+    the Ctrl-C certainly comes mid-run, and it does not wait for the blocks still to run.
+    SIGTERM to the submitter (``kill``, a batch system ending a job) the same way, exit
+    143: it died of the signal, printing nothing, and left its row ``stalled``."""
     path = spec_file(RESUME_SPEC)
     spec = load_spec(path)
     root = tmp_path / "store"
@@ -298,18 +302,22 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
     gate.let(2)
     wait_for(lambda: len(store.Journal(journal).files()) >= 2 or proc.poll() is not None,
              "two journaled blocks", 300, poll=0.02)
-    os.killpg(proc.pid, signal.SIGINT)
+    if sig == signal.SIGINT:
+        os.killpg(proc.pid, sig)
+    else:
+        os.kill(proc.pid, sig)
     try:
         out, err = proc.communicate(timeout=300)
     finally:
         gate.open()
-    assert proc.returncode == 130, err
+    assert proc.returncode == status, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     last = err.strip().splitlines()[-1]
     kept = len(store.Journal(journal).files())
-    assert last == (f"ditherlab: interrupted; the journal keeps the {kept} finished blocks "
+    assert last == (f"ditherlab: {said}; the journal keeps the {kept} finished blocks "
                     "(of 32); submit the spec again to resume")
     store.open_cube(root / spec.sweep_id / "cube.nc")
     assert kept == 2
+    assert ditherlab("status", spec.sweep_id, store=root).stdout.count("cancelled") >= 1
     resumed = ditherlab("submit", str(path), "--quiet", store=root, check=True)
     assert _ran(resumed) == 32 - kept
