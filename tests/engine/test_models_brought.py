@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from engine import Scene, Settings, registry, simulate
+from sweeps.planning.plan import make_plan
 from sweeps.spec import SpecError, load_spec
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -68,6 +69,13 @@ def test_a_spec_names_the_example_and_its_source_is_in_the_sweep_id(tmp_path, mo
     (pkg / "common.py").write_text("SCALE = 2.0\n")
     registry.resolve.cache_clear()
     assert len({first, second, third, load_spec(spec).sweep_id}) == 4
+    # the plan's effects: a brought law's Stribeck curve and bristle damping are its own to
+    # name (``effects()``); the plan listed the scene's flags as compiled in (a newcomer's
+    # pass: "compiled in: stribeck, bristle damping" for a Dahl law of their own)
+    effects = make_plan(load_spec(spec)).effects()
+    assert not {"stribeck", "bristle damping"} & effects.keys(), effects
+    assert {"stribeck", "bristle damping"} <= make_plan(load_spec(
+        {**spec, "friction": "lugre", "params": {}})).effects().keys()
 
 
 BAD = {
