@@ -38,6 +38,9 @@ def _stat(path: Path):
         return None
 
 
+UNREADABLE = "the cube cannot be read; `ditherlab status SWEEP` says how to repair it"
+
+
 def cube_warnings(cube: Path, cache: dict | None = None, st=None) -> list[str]:
     """The accuracy warnings a cube records ([] without a cube or estimate). ``cache`` maps
     a path to ``(stat key, warnings)``: an unchanged cube (same inode, size and mtime: a
@@ -55,7 +58,7 @@ def cube_warnings(cube: Path, cache: dict | None = None, st=None) -> list[str]:
 
         found = accuracy_warnings(store.read_header(cube).attrs)
     except OSError:   # unreadable (a damaged cube): `status SWEEP` says how to repair it
-        found = ["the cube cannot be read; `ditherlab status SWEEP` says how to repair it"]
+        found = [UNREADABLE]
     if cache is not None:
         cache[cube] = (key, found)
     return found

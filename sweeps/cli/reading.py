@@ -116,7 +116,7 @@ def _note(row: dict, live: str, root: Path, width: int = 90) -> str:
     finished sweep whose cube records accuracy warnings, how many and where to read them."""
     from store import SweepDir
 
-    from ..overview import cube_warnings
+    from ..overview import UNREADABLE, cube_warnings
     from ..service import progress_text
 
     if live == "running":
@@ -130,10 +130,12 @@ def _note(row: dict, live: str, root: Path, width: int = 90) -> str:
     else:
         text = row["message"] or f"{live} {row['updated'][:19]}"
     if live in ("done", "partial"):
-        n = len(cube_warnings(SweepDir(root, row["sweep_id"]).cube))
-        if n:
-            text = (f"{n} accuracy warning{'s' * (n > 1)} (`ditherlab status "
-                    f"{row['sweep_id']}`); {text}")
+        found = cube_warnings(SweepDir(root, row["sweep_id"]).cube)
+        if found == [UNREADABLE]:   # (it was counted as "1 accuracy warning")
+            text = f"the cube cannot be read (`ditherlab status {row['sweep_id']}`); {text}"
+        elif found:
+            text = (f"{len(found)} accuracy warning{'s' * (len(found) > 1)} (`ditherlab "
+                    f"status {row['sweep_id']}`); {text}")
     return text if len(text) <= width else text[:width - 3] + "..."
 
 

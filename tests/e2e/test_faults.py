@@ -105,6 +105,8 @@ def test_a_damaged_cube_is_named_by_query_and_repaired_by_submit(avg, tmp_path, 
     else:
         assert "is unreadable" in line and "submit the spec again (ditherlab submit " in line
         assert "to republish it from the journal" in line
+        table = ditherlab("status", store=root, check=True).stdout   # not "1 accuracy warning"
+        assert "the cube cannot be read" in table and "accuracy warning" not in table, table
     repaired = ditherlab("submit", str(path), "--quiet", store=root, check=True)
     assert "already complete" in repaired.stdout
     xr.testing.assert_identical(_results(cube), _results(_cube(clean, spec)))
