@@ -204,16 +204,19 @@ class Journal:
         Returns the new path, or None if it could not be moved (a read-only store)."""
         path = self._where(block_id) if path is None else path
         dest = self.folder / BAD_DIR / f"{path.name}.{time.strftime('%Y%m%dT%H%M%S')}-{os.getpid()}"
+        # a group file that cannot be read has no block ids (journal_groups.index: a
+        # negative key): named by its file ("block -2 is bad" before)
+        what = f"block {block_id}" if block_id >= 0 else f"file {path.name}"
         try:
             dest.parent.mkdir(exist_ok=True)
             os.replace(path, dest)
         except FileNotFoundError:   # another process set it aside first
             return None
         except OSError as err:
-            _warn(f"journal: block {block_id} ({path}) is bad: {reason}; it is ignored and "
+            _warn(f"journal: {what} ({path}) is bad: {reason}; it is ignored and "
                   f"will be recomputed (could not move it aside: {err.strerror})")
             return None
-        _warn(f"journal: block {block_id} is bad: {reason}; moved to {dest}, its points "
+        _warn(f"journal: {what} is bad: {reason}; moved to {dest}, its points "
               "will be recomputed")
         return dest
 

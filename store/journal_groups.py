@@ -72,8 +72,8 @@ def index(folder: Path) -> dict[int, Path]:
     for name in sorted(n for n in _names(folder) if NAME.match(n)):
         path = Path(folder) / name
         try:
-            with np.load(path, allow_pickle=False) as npz:
-                ids = npz[BLOCKS].tolist()
+            with open(path, "rb") as f, np.load(f, allow_pickle=False) as npz:   # (np.load
+                ids = npz[BLOCKS].tolist()          # left a damaged file's handle open)
         except Exception:  # noqa: BLE001 -- unreadable: reading it says why and sets it aside
             ids = [-1 - int(NAME.match(name).group(1))]   # (a key no block has)
         found.update((int(b), path) for b in ids)

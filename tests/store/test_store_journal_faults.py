@@ -157,3 +157,20 @@ def test_rebuild_of_a_good_journal_is_unchanged(cube, tmp_path, recwarn):
     xr.testing.assert_identical(store.as_dataset(store.rebuild(cube, journal, PLAN)),
                                 store.as_dataset(direct))
     assert not recwarn.list
+
+
+def test_an_unreadable_group_file_is_named_by_its_file(cube, tmp_path):
+    """A group file (several blocks journaled together) that cannot be read has no block
+    ids to name: the warning names the file. It said "journal: block -2 is bad" (a fault
+    campaign, 2026-11-29: the index's stand-in key for the unreadable file)."""
+    journal = store.Journal(tmp_path / "journal")
+    path = journal.write_group([(b, block_record(cube, index, seed=b))
+                                for b, index in enumerate(PLAN)])
+    path.write_bytes(path.read_bytes()[:200])
+    with pytest.warns(JournalWarning) as caught:
+        assert journal.done(PLAN) == set()
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 1, messages
+    message = messages[0]
+    assert message.startswith(f"journal: file {path.name} is bad: "), message
+    assert "block -" not in message
