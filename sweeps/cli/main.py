@@ -8,13 +8,13 @@ fault ends in one line.
     ditherlab status [SWEEP] [--format table|json]
     ditherlab cancel SWEEP [--wait]
     ditherlab query SWEEP [--var NAME] [--sel AXIS=VALUE ...] [--format table|csv|json]
-    ditherlab map SWEEP --kind stick-slip|stability|friction [--sel AXIS=VALUE ...] -o FILE
+    ditherlab map SWEEP --kind stick-slip|stability|friction|hunting [--sel AXIS=VALUE ...] -o F
     ditherlab plan SPEC.toml [--record];  ditherlab --version;  -v / -q on every command
     ditherlab web [--bind HOST:PORT] [--token-file F];  serve --web HOST:PORT
 
 Exit status: 0 success, 1 a run or lookup failed, 2 the input (spec, arguments, a brought
-model's fault) was refused, 130 interrupted. Imports stay inside the commands: ``--help``
-and ``status`` start in a fraction of a second (no dask, numba, xarray or matplotlib).
+model's fault) was refused, 130 interrupted (143 SIGTERM to submit). Imports stay inside the
+commands: ``--help`` and ``status`` start in a fraction of a second (no dask, numba, xarray).
 """
 from __future__ import annotations
 
@@ -222,21 +222,21 @@ def _stdout_closed() -> bool:
 def _quiet_finalizers() -> None:
     """After a Ctrl-C, objects it cut short in their making (an h5netcdf file interrupted in
     its ``__init__``) fail in their finalizers at exit, which Python prints as "Exception
-    ignored in ... Traceback" below the interrupt's one line: read as a crash (seen in
-    tests/e2e/test_faults.py's Ctrl-C test under load). Those reports are dropped from here
-    on (``DITHERLAB_DEBUG=1`` keeps them)."""
+    ignored in ... Traceback" below the one line (tests/e2e/test_faults.py's Ctrl-C test
+    under load). Those reports are dropped from here on (``DITHERLAB_DEBUG=1`` keeps them)."""
     if not os.environ.get("DITHERLAB_DEBUG"):
         sys.unraisablehook = lambda info: None
 
 
 def _fail(message, status: int) -> int:
+    if "sweeps.run.phases" in sys.modules:   # the progress bars end first: the line alone
+        sys.modules["sweeps.run.phases"].close_bars()
     print(f"ditherlab: {message}", file=sys.stderr)
     return status
 
 
 def _fail_unexpected(exc: Exception) -> int:
-    """Store faults (disk full, read-only, damaged files), OS and SQLite errors, and bugs:
-    one line each."""
+    """Store faults (disk full, read-only, damaged files), OS, SQLite errors, bugs: a line."""
     import sqlite3
 
     import store

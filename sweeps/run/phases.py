@@ -73,6 +73,16 @@ def say(plan, phase: str, enabled: bool) -> None:
         print(f"{plan.spec.name} [{plan.sweep_id}] {phase}", file=sys.stderr, flush=True)
 
 
+def close_bars() -> None:
+    """Close the bars still open (a run that raised): each draws its last state and ends its
+    line, so the fault's one line that follows stands alone (sweeps.cli.main). Where stderr
+    was no terminal, that line was glued onto a bar's last redraw, and a bar closed at exit
+    drew itself again below it (a fault campaign, 2026-11-29: disk full, Ctrl-C)."""
+    tqdm = sys.modules.get("tqdm")
+    for open_bar in list(getattr(getattr(tqdm, "tqdm", None), "_instances", None) or ()):
+        open_bar.close()
+
+
 class Timer:
     """A phase without a count that can take seconds to a minute (a cluster starting, a
     first compilation): the first call shows ``<desc>: <elapsed>``, the next calls, made

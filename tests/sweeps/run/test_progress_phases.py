@@ -100,3 +100,19 @@ def test_a_terminal_of_zero_columns_still_shows_the_phases(monkeypatch):
     os.close(master)
     assert _states(text, plan)[-1].startswith("points:  38%"), text
     assert "compiling the engine" in text
+
+
+def test_a_fault_line_stands_below_the_bars_not_inside_one(capfd):
+    """A run that raised (a full disk, a Ctrl-C) left its bar open: where stderr is no
+    terminal, the fault's one line was glued onto the bar's last redraw, and the bar,
+    closed at exit, drew itself again below it (a fault campaign, 2026-11-29)."""
+    from sweeps.cli.main import _fail
+    from sweeps.run import phases
+
+    plan = make_plan(parse_spec(SPEC))
+    bar = phases.bar(plan, "points", plan.n_points, "point", True)
+    bar.update(3)
+    assert _fail("No space left on device", 1) == 1
+    del bar   # (as at exit)
+    err = capfd.readouterr().err
+    assert err.endswith("\nditherlab: No space left on device\n"), repr(err[-300:])
