@@ -174,7 +174,8 @@ def isolated(who: str, fn, *args):
                                   capture_output=True, timeout=limit)
         except subprocess.TimeoutExpired:   # (subprocess.run killed the child)
             raise ModelError(f"{who}: no result after {limit:g} s -- an endless loop in its "
-                             f"kernels? ({TIMEOUT_ENV} sets how long to wait)") from None
+                             "kernels, or a stiff model spending its step budget (integrator "
+                             f"= \"rodas4\")? ({TIMEOUT_ENV} sets how long to wait)") from None
         if result.exists():
             try:
                 status, value = pickle.loads(result.read_bytes())

@@ -105,8 +105,9 @@ def watched(scene, points: np.ndarray, p: np.ndarray, settings):
     if thread.is_alive():
         _leave_when_idle()
         raise ModelError(f"no result after {limit:g} s -- an endless loop in the model's "
-                         f"kernels at these points? ({BLOCK_TIMEOUT_ENV} sets how long "
-                         f"to wait)")
+                         "kernels at these points, or a stiff model spending its step budget "
+                         f"(integrator = \"rodas4\")? ({BLOCK_TIMEOUT_ENV} sets how long "
+                         "to wait)")
     if "error" in box:
         raise box["error"]
     return box["result"]

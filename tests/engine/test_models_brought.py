@@ -319,7 +319,8 @@ def test_a_first_step_that_never_returns_is_one_line(tmp_path, monkeypatch):
     spec = {"friction": "endless:X", "dither": "none", "outputs": ["v_mean"],
             "time": {"t_end": 2.0, "t_transient": 1.0}}
     with pytest.raises(SpecError, match=r"- friction 'endless:X' on system 'slider': no "
-                       r"result after 4 s -- an endless loop in its kernels\? "
+                       r"result after 4 s -- an endless loop in its kernels, or a stiff "
+                       r"model spending its step budget \(integrator = \"rodas4\"\)\? "
                        r"\(DITHERLAB_MODEL_TIMEOUT_S sets how long to wait\)"):
         load_spec(spec)
     monkeypatch.setenv("DITHERLAB_MODEL_TIMEOUT_S", "soon")
