@@ -56,22 +56,22 @@ _ENGINE_CACHE: str | None = None   # numba's CACHE_DIR for the engine's kernels
 def _use_engine_cache_dir() -> None:
     """Point numba's cache at :func:`cache_dir` before any engine function is decorated
     (the locator is chosen at decoration time), its files checked (engine.kernel_cache).
-    A folder that cannot be written: no disk cache, said once (numba fell back to each
-    source folder's ``__pycache__``, which no engine fingerprint names: stale kernels).
+    Unwritable: no disk cache, said once (not numba's fallback, each source folder's
+    ``__pycache__``, which no engine fingerprint names: stale kernels).
 
     :func:`njit` points it there again before each decoration: numba re-reads its whole
     configuration from the environment at the first compile after any ``NUMBA_*`` variable
     changed (``numba.core.config.reload_config``), which sets ``CACHE_DIR`` back to
-    ``$NUMBA_CACHE_DIR`` or "" -- each source folder's ``__pycache__``, a cache that no
-    engine fingerprint names. engine.gpu sets such a variable; after a GPU run every scene
-    a process made next was cached in the checkout's ``engine/__pycache__`` and missed this
-    cache (tests/engine/test_disk_cache.py)."""
+    ``$NUMBA_CACHE_DIR`` or "" (``__pycache__`` again). engine.gpu sets such a variable;
+    after a GPU run every scene a process made next was cached in the checkout's
+    ``engine/__pycache__`` and missed this cache (tests/engine/test_disk_cache.py)."""
     global _ENGINE_CACHE
     path = cache_dir()
     try:
         path.mkdir(parents=True, exist_ok=True)
-        os.close(os.open(probe := path / f".probe-{os.getpid()}", os.O_CREAT | os.O_WRONLY))
-        os.unlink(probe)
+        probe = path / f".probe-{os.uname().nodename}-{os.getpid()}-{secrets.token_hex(4)}"
+        os.close(os.open(probe, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
+        probe.unlink(missing_ok=True)
     except OSError as exc:
         kernel_cache.unwritable(str(path), exc)
         return
@@ -240,6 +240,8 @@ def njit(fn=None, *, refcount: bool = True, **options):
         if _ENGINE_CACHE is not None:   # (a config reload may have reset it)
             numba.config.CACHE_DIR = _ENGINE_CACHE
         dispatcher = numba.njit(**options)(func)
+        if options["cache"]:
+            kernel_cache.uncached_elsewhere(dispatcher)
         if uuid is not None:
             try:
                 dispatcher._set_uuid(uuid)

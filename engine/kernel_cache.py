@@ -51,9 +51,10 @@ def install(folder: str) -> None:
         if not ours(self):
             return originals["_load_index"](self)
         payload = _read(self._index_path)
-        if payload is None:
+        try:   # (an index another numba wrote may not unpickle: a miss)
+            version, stamp, overloads = pickle.loads(payload) if payload else (None,) * 3
+        except Exception:  # noqa: BLE001
             return {}
-        version, stamp, overloads = pickle.loads(payload)
         return overloads if (version, stamp) == (self._version, self._source_stamp) else {}
 
     def _save_index(self, overloads):
@@ -77,6 +78,30 @@ def install(folder: str) -> None:
     for fn in (_load_index, _save_index, _load_data, _save_data):
         setattr(cls, fn.__name__, fn)
     cls._ditherlab = True
+    save_overload = caching.Cache.save_overload
+
+    def guarded_save(self, sig, data):   # (numba makes the folder first, outside _write)
+        try:
+            save_overload(self, sig, data)
+        except OSError as exc:
+            if not (_FOLDER and os.path.abspath(self._cache_path).startswith(_FOLDER[0])):
+                raise
+            unwritable(self._cache_path, exc)
+
+    caching.Cache.save_overload = guarded_save
+
+
+def uncached_elsewhere(dispatcher) -> None:
+    """No disk cache for ``dispatcher`` unless numba chose the engine's folder for it: numba
+    falls back to the source folder's ``__pycache__`` when a subfolder cannot be made, a
+    cache that no engine fingerprint names (stale kernels)."""
+    from numba.core.caching import NullCache
+
+    path = getattr(getattr(dispatcher, "_cache", None), "_cache_path", None)
+    if path is not None and not (_FOLDER and os.path.join(os.path.abspath(path), "")
+                                 .startswith(_FOLDER[0])):
+        unwritable(path, OSError(f"numba chose {path} instead"))
+        dispatcher._cache = NullCache()
 
 
 def _read(path: str) -> bytes | None:

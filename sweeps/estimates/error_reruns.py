@@ -188,7 +188,7 @@ class SampleRuns:
             self.cancel(client)
             raise RuntimeError(f"a re-run was given up: {crash_line(self.deaths.allowed + 1)}")
         self.harvest()
-        records = [f.result() for f, _ in self.groups]   # (all taken: none erred)
+        records = [f.result() for f, _ in self.groups]   # (an erred task raises here)
         of_rerun = {}
         for (_, group), record in zip(self.groups, records):
             of_rerun.update(zip(group, record.split([1] * len(group))))

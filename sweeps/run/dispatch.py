@@ -158,8 +158,9 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             given_up = _resubmit_orphans(client, inflight, good, queue, deaths)
-            for runs in (sample, filler):   # (the error sample's re-runs)
-                if runs is not None and good:
+            for runs in filter(None, (sample, filler)):   # (the error sample's re-runs:
+                runs.harvest()                           # those not in ``done`` taken too)
+                if good:
                     runs.rescue(client, good)
             if given_up:
                 _give_up(plan, given_up, deaths, sink, bar)
@@ -194,6 +195,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 cost[0] += float(np.sum(result.cost_s))
                 cost[1] += len(group)
                 cost[2] += sum(cost_of[b] for b in group)
+        f = result = None   # (no future held here: a worker that hung waits for its release)
         if finished:   # (not: only re-runs ended, which the estimate gathers)
             sink.many(finished)   # journaled as one group
             bar.update(sum(len(plan.blocks[b]) for b, _ in finished))

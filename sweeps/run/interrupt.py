@@ -22,6 +22,7 @@ import threading
 from contextlib import contextmanager
 
 _pressed = threading.Event()
+_terminated = threading.Event()   # ... and the signal was SIGTERM (terminated_as_interrupt)
 
 
 def _note_and_raise(signum, frame):
@@ -57,24 +58,33 @@ def check() -> None:
     """Raise KeyboardInterrupt if a SIGINT arrived (and was swallowed) since the last check."""
     if _pressed.is_set():
         _pressed.clear()
+        if _terminated.is_set():
+            from ..errors import Terminated
+            raise Terminated
         raise KeyboardInterrupt
 
 
 @contextmanager
 def terminated_as_interrupt():
     """While inside (the main thread of ``ditherlab submit``), SIGTERM raises
-    :class:`sweeps.errors.Terminated`, a KeyboardInterrupt: the run stops as at a Ctrl-C."""
+    :class:`sweeps.errors.Terminated`, a KeyboardInterrupt: the run stops as at a Ctrl-C,
+    and one that something swallowed is raised again by :func:`check` (inside
+    :func:`remembered`, whose hook keeps it unprinted)."""
     from ..errors import Terminated
 
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
-    def terminate(signum, frame):
+    def terminate(signum, frame):   # noted as a Ctrl-C is: check() raises it again
+        _terminated.set()
+        _pressed.set()
         raise Terminated
 
+    _terminated.clear()
     previous = signal.signal(signal.SIGTERM, terminate)
     try:
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+        _terminated.clear()

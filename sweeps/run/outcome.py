@@ -13,6 +13,7 @@ import numpy as np
 
 import store
 from engine import status as S
+from store.flags import INFERRED
 
 from .lease_holder import CANCELLED, LEASE_LOST, SHUTDOWN
 from .sink import done_blocks, point_counts
@@ -97,7 +98,11 @@ def failures_text(cube, path: str) -> str:
     retry them)" whatever the cause, and a run again fails the same points."""
     status = cube["status"].values
     failed = (status != S.OK) & (status != S.NOT_COMPUTED)
-    gave_up = status == S.FAILED
+    inferred = np.zeros(status.shape, bool)   # a refined sweep's copies of computed points
+    if store.cube.PROVENANCE in cube.data_vars:
+        inferred = cube[store.cube.PROVENANCE].values.reshape(status.shape) == INFERRED
+    gave_up, status = status == S.FAILED, np.where(inferred, S.OK, status)
+    gave_up &= ~inferred
     if path != "simulate":   # (sweeps.planning: averaged, HBM ...: no integrator)
         causes = [(gave_up, f"had no {path} solution (its method did not converge, or "
                    "omega <= 0)")]
@@ -108,6 +113,7 @@ def failures_text(cube, path: str) -> str:
                   (gave_up & (evals == 0), "in blocks that failed (the warnings said why; "
                    "submit again runs them again)")]
     causes.append((status == S.NON_FINITE, "went non-finite (NaN or inf)"))
+    causes.append((failed & inferred, "inferred from failed points (refine = true)"))
     parts = [f"{int(np.sum(where))} {why}" for where, why in causes if np.any(where)]
     return f"{int(np.sum(failed))} of {status.size} points failed: " + "; ".join(parts)
 

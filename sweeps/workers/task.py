@@ -151,6 +151,9 @@ async def _leave(worker) -> None:
 
     from distributed.core import Status
 
+    if worker.status != Status.running:   # (closing already)
+        return
+    worker.memory_manager.memory_pause_fraction = False   # (its monitor unpaused, each 1 s)
     worker.status = Status.paused
     while any(ts.state in _HELD for ts in worker.state.tasks.values()):
         await asyncio.sleep(0.1)

@@ -112,3 +112,23 @@ def test_a_full_cache_folder_costs_a_compile_not_the_kernel(kernel, tmpfs):
         out, err = run(kernel, disk)
         assert out["value"] == EXPECTED and out["hits"] == 0, err
         assert err.count("cannot be written (No space left on device)") == 1, err
+
+
+def test_a_kernel_numba_would_cache_outside_the_engine_folder_is_left_uncached(tmp_path):
+    """numba falls back to the source folder's ``__pycache__`` when it cannot make its
+    subfolder of the engine's cache (a review): such a kernel gets no disk cache at all,
+    never one that no engine fingerprint names; one in the engine's folder keeps its own."""
+    from numba.core.caching import NullCache
+
+    from engine import kernel_cache
+    from engine.jit import njit
+
+    @njit
+    def plus_one(x):
+        return x + 1.0
+
+    kernel_cache.uncached_elsewhere(plus_one)
+    assert not isinstance(plus_one._cache, NullCache)   # (the engine's folder)
+    plus_one._cache._cache_path = str(tmp_path / "__pycache__")   # numba's fallback
+    kernel_cache.uncached_elsewhere(plus_one)
+    assert isinstance(plus_one._cache, NullCache) and plus_one(1.0) == 2.0

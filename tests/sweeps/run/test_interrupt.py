@@ -134,3 +134,27 @@ def test_after_a_ctrl_c_the_command_prints_no_finalizer_tracebacks(monkeypatch, 
     obj = _FailsInDel()
     del obj
     assert reported == []
+
+
+class _TerminatedInDel:
+    def __del__(self):   # SIGTERM handled inside a __del__, as in a dask weakref callback
+        os.kill(os.getpid(), signal.SIGTERM)
+        for _ in range(1000):
+            pass
+
+
+def test_a_swallowed_sigterm_is_raised_again_as_terminated(terminal, capsys):
+    """SIGTERM to ``submit`` stops it as a Ctrl-C does (sweeps.run.interrupt); one that
+    lands in a ``__del__`` is not lost (it was: the handler raised without noting it, and
+    Python printed "Exception ignored ... Terminated" with a traceback; a review) and is
+    raised again by the next check as Terminated (exit 143, not 130)."""
+    from sweeps.errors import Terminated
+
+    before = signal.getsignal(signal.SIGTERM)
+    with interrupt.remembered(), interrupt.terminated_as_interrupt():
+        obj = _TerminatedInDel()
+        del obj
+        with pytest.raises(Terminated):
+            interrupt.check()
+    assert "Traceback" not in capsys.readouterr().err
+    assert signal.getsignal(signal.SIGTERM) is before

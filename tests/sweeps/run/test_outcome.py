@@ -184,3 +184,16 @@ def test_the_failed_points_are_told_by_cause_with_what_to_do():
     assert failures_text(cube, "averaged") == (
         "4 of 6 points failed: 3 had no averaged solution (its method did not converge, or "
         "omega <= 0); 1 went non-finite (NaN or inf)")
+
+
+def test_a_refined_sweeps_inferred_failures_are_told_apart():
+    """An inferred point copies its source's status with no work of its own (0 evaluations):
+    it read as "in blocks that failed ... submit again" (a review)."""
+    status = np.array([S.OK, S.FAILED, S.FAILED, S.OK])
+    evals = np.array([10, 300_000_008, 0, 0])
+    provenance = np.array([0, 0, 1, 1])   # store.flags: COMPUTED, INFERRED
+    cube = xr.Dataset({"status": ("p", status), "evals": ("p", evals),
+                       "provenance": ("p", provenance)})
+    assert failures_text(cube, "simulate") == (
+        '2 of 4 points failed: 1 the integrator gave up (its step budget or step size: a '
+        'stiff model? integrator = "rodas4"); 1 inferred from failed points (refine = true)')
