@@ -109,6 +109,9 @@ def _check_declarations(kind: str, ref: str, obj) -> None:
     name = getattr(obj, "name", "")
     if not isinstance(name, str) or not name.isidentifier():
         raise ModelError(f"{kind} {ref!r}: its name must be an identifier, got {name!r}")
+    if name in KIND[kind][1]:   # (accepted before: plan and the states then read as the built-in's)
+        raise ModelError(f"{kind} {ref!r}: its name {name!r} is a built-in {kind}'s; give it "
+                         "another")
     params = getattr(obj, "params", {})
     if not isinstance(params, dict) or not all(isinstance(v, Param) for v in params.values()):
         raise ModelError(f"{kind} {ref!r}: params must be a dict of engine.contract.Param")

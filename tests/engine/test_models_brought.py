@@ -93,6 +93,10 @@ BAD = {
                    "params must be a dict of engine.contract.Param"),
     "bad-name": ("from engine.contract import FrictionLaw\nclass X(FrictionLaw):\n"
                  "    name = 'my law'\n", "X", {}, "its name must be an identifier"),
+    # accepted before: plan showed "z (lugre)" for the states of a Dahl law (a newcomer)
+    "a-builtin-name": ("from engine.contract import FrictionLaw\nclass X(FrictionLaw):\n"
+                       "    name = 'lugre'\n", "X", {},
+                       "its name 'lugre' is a built-in friction's; give it another"),
 }
 _LAW = '''
 from engine.contract import FrictionLaw, LawKernels, Param
