@@ -44,8 +44,7 @@ def install(folder: str) -> None:
                  for name in ("_load_index", "_save_index", "_load_data", "_save_data")}
 
     def ours(self) -> bool:
-        return bool(_FOLDER) and os.path.join(os.path.abspath(self._cache_path),
-                                              "").startswith(_FOLDER[0])
+        return _inside(self._cache_path)
 
     def _load_index(self):
         if not ours(self):
@@ -84,7 +83,7 @@ def install(folder: str) -> None:
         try:
             save_overload(self, sig, data)
         except OSError as exc:
-            if not (_FOLDER and os.path.abspath(self._cache_path).startswith(_FOLDER[0])):
+            if not _inside(self._cache_path):
                 raise
             unwritable(self._cache_path, exc)
 
@@ -98,10 +97,14 @@ def uncached_elsewhere(dispatcher) -> None:
     from numba.core.caching import NullCache
 
     path = getattr(getattr(dispatcher, "_cache", None), "_cache_path", None)
-    if path is not None and not (_FOLDER and os.path.join(os.path.abspath(path), "")
-                                 .startswith(_FOLDER[0])):
+    if path is not None and not _inside(path):
         unwritable(path, OSError(f"numba chose {path} instead"))
         dispatcher._cache = NullCache()
+
+
+def _inside(path: str) -> bool:
+    """``path`` is in the engine's cache folder (once :func:`install` named one)."""
+    return bool(_FOLDER) and os.path.join(os.path.abspath(path), "").startswith(_FOLDER[0])
 
 
 def _read(path: str) -> bytes | None:

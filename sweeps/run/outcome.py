@@ -98,11 +98,10 @@ def failures_text(cube, path: str) -> str:
     retry them)" whatever the cause, and a run again fails the same points."""
     status = cube["status"].values
     failed = (status != S.OK) & (status != S.NOT_COMPUTED)
-    inferred = np.zeros(status.shape, bool)   # a refined sweep's copies of computed points
+    computed = np.ones(status.shape, bool)   # (a refined sweep's inferred points copy one)
     if store.cube.PROVENANCE in cube.data_vars:
-        inferred = cube[store.cube.PROVENANCE].values.reshape(status.shape) == INFERRED
-    gave_up, status = status == S.FAILED, np.where(inferred, S.OK, status)
-    gave_up &= ~inferred
+        computed = cube[store.cube.PROVENANCE].values.reshape(status.shape) != INFERRED
+    gave_up = (status == S.FAILED) & computed
     if path != "simulate":   # (sweeps.planning: averaged, HBM ...: no integrator)
         causes = [(gave_up, f"had no {path} solution (its method did not converge, or "
                    "omega <= 0)")]
@@ -112,8 +111,8 @@ def failures_text(cube, path: str) -> str:
                    "size: a stiff model? integrator = \"rodas4\")"),
                   (gave_up & (evals == 0), "in blocks that failed (the warnings said why; "
                    "submit again runs them again)")]
-    causes.append((status == S.NON_FINITE, "went non-finite (NaN or inf)"))
-    causes.append((failed & inferred, "inferred from failed points (refine = true)"))
+    causes.append(((status == S.NON_FINITE) & computed, "went non-finite (NaN or inf)"))
+    causes.append((failed & ~computed, "inferred from failed points (refine = true)"))
     parts = [f"{int(np.sum(where))} {why}" for where, why in causes if np.any(where)]
     return f"{int(np.sum(failed))} of {status.size} points failed: " + "; ".join(parts)
 

@@ -121,9 +121,9 @@ def _leave_when_idle() -> None:
     It ended itself 5 s after a hung block instead, whatever it held. The next task it had
     started by then died with it and counted as a crash; the results not yet taken (the
     error estimate's re-runs) were computed again, and a re-run that hung again ended the
-    next worker. A 6-point sweep whose law loops at 2 points ended after 85 s, not 10, its
-    2 blocks given up as "4 worker processes died computing it" instead of "no result
-    after 10 s" (tests/e2e/test_crashing_model.py)."""
+    next worker. A 6-point sweep whose law loops at 2 points, with a 10 s limit, ended
+    after 85 s (35 s now), its 2 blocks given up as "4 worker processes died computing it"
+    instead of "no result after 10 s" (tests/e2e/test_crashing_model.py)."""
     import threading
 
     try:
