@@ -16,6 +16,7 @@ from tornado.ioloop import IOLoop
 from tornado.web import HTTPError
 
 from .errors import SENTENCES, status_of
+from .first_imports import after_imports
 from .security import COOKIE, CSP, HEADERS, bearer, token_matches
 
 HERE = Path(__file__).parent
@@ -24,8 +25,9 @@ TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(HERE / "templates"
 
 
 def in_executor(fn, *args):
-    """``fn(*args)`` on the loop's thread pool, awaited: blocking work off the event loop."""
-    return IOLoop.current().run_in_executor(None, fn, *args)
+    """``fn(*args)`` on the loop's thread pool, awaited: blocking work off the event loop
+    (after the server's first imports: sweeps.web.first_imports)."""
+    return IOLoop.current().run_in_executor(None, after_imports, fn, *args)
 
 
 class Base(tornado.web.RequestHandler):

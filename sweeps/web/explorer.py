@@ -16,6 +16,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 from ..errors import RefusedError
 from .errors import Busy
+from .first_imports import after_imports
 from .lru import LRU
 
 MAX_AXIS = 400
@@ -98,7 +99,7 @@ class Explorer:
     def warm_up(self) -> Future:
         """Compile (or load from numba's cache) the averaged kernels before the first click."""
         small = spec_from_query({"W_num": "3", "v_ref_num": "3"})
-        return self.pool.submit(compute, small)
+        return self.pool.submit(after_imports, compute, small)
 
     def cube(self, key: str, spec_dict: dict) -> Future:
         with self._lock:
@@ -108,7 +109,7 @@ class Explorer:
             if self._running is not None:
                 raise Busy("another explorer computation is running; try again in a moment")
             self._running = key
-            fut = self.pool.submit(self._compute, key, spec_dict)
+            fut = self.pool.submit(after_imports, self._compute, key, spec_dict)
             self._results.put(key, fut)
             return fut
 

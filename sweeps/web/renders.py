@@ -17,6 +17,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 from .errors import Busy
+from .first_imports import after_imports
 from .lru import LRU
 
 RENDER_THREADS = 2   # the explorer's chart and curves are drawn side by side on 2 cores
@@ -128,7 +129,7 @@ class MapCache:
                 return self._pending[key]
             if len(self._pending) >= self.max_waiting:
                 raise Busy(f"{len(self._pending)} maps are being drawn; try again in a moment")
-            fut = self.pool.submit(self._draw, key, draw)
+            fut = self.pool.submit(after_imports, self._draw, key, draw)
             self._pending[key] = fut
             return fut
 

@@ -166,7 +166,9 @@ def test_the_drawing_process_ends_with_a_killed_server(web_store, drawn):
     if drawn:
         status, _, _ = request(f"http://127.0.0.1:{port}",
                                f"/sweep/{web_store['avg']}/map/stability.png?sel.v_d=0.1")
-        assert status == 200
+        if status != 200:   # the server's log says why
+            proc.kill()
+            raise AssertionError(f"{status}: {proc.communicate()[1].decode()[-3000:]}")
     children = psutil.Process(proc.pid).children(recursive=True)
     assert children   # the drawing process (and multiprocessing's resource tracker)
     proc.kill()
