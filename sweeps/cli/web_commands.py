@@ -96,9 +96,13 @@ def _serve_with_web(serve_cmd):
                 raise RefusedError("--token-file applies with --web only")
             return serve_cmd(args)
         from ..web.app import start_in_thread
+        from ..web.first_imports import ready
 
         ctx, host, port, link = _prepare(store_root(args.store), args.web, args.token_file,
                                          "--web")
+        # made here, before the pages' threads start: serve's own imports (dask, numba)
+        # would otherwise run beside theirs (sweeps.web.first_imports)
+        ready()
         try:
             bound, stop = start_in_thread(ctx, host, port)
         except OSError as exc:
