@@ -284,16 +284,19 @@ def test_a_damaged_catalogue_is_one_line_saying_how_to_rebuild_it(avg, tmp_path)
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("sig, status, said", [(signal.SIGINT, 130, "interrupted"),
-                                               (signal.SIGTERM, 143, "terminated (SIGTERM)")])
+@pytest.mark.parametrize("sig, group, status, said", [
+    (signal.SIGINT, True, 130, "interrupted"),
+    (signal.SIGTERM, False, 143, "terminated (SIGTERM)"),
+    (signal.SIGTERM, True, 143, "terminated (SIGTERM)"),
+], ids=["ctrl-c", "kill", "scancel"])
 def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_file, env,
-                                                                gate, sig, status, said):
+                                                                gate, sig, group, status, said):
     """SIGINT to the whole process group, as a terminal's Ctrl-C: exit 130, one line, no
     tracebacks from the dask workers; the next submit computes only the missing blocks.
     Two blocks are let through the gate and the rest held until the submitter has exited:
     the Ctrl-C certainly comes mid-run, and it does not wait for the blocks still to run.
-    SIGTERM to the submitter (``kill``, a batch system ending a job) the same way, exit
-    143: it died of the signal, printing nothing, and left its row ``stalled``."""
+    SIGTERM to the submitter (``kill``) the same way, exit 143; and to the whole group at
+    once (Slurm's ``scancel``: the workers are signalled with the submitter)."""
     path = spec_file(RESUME_SPEC)
     spec = load_spec(path)
     root = tmp_path / "store"
@@ -304,7 +307,7 @@ def test_ctrl_c_says_what_was_kept_and_resume_computes_the_rest(tmp_path, spec_f
     gate.let(2)
     wait_for(lambda: len(store.Journal(journal).files()) >= 2 or proc.poll() is not None,
              "two journaled blocks", 300, poll=0.02)
-    if sig == signal.SIGINT:
+    if group:   # Ctrl-C in a terminal; scancel, which signals every process of the job
         os.killpg(proc.pid, sig)
     else:
         os.kill(proc.pid, sig)
