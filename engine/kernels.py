@@ -78,6 +78,17 @@ def _record_instant(t, y, p, sq, obs, ctr, rec):
     record_sample(t, y, ctr, rec)
 
 
+PERIOD_CAP = 0.25   # of a sine dither's period: the longest adaptive step (see period_cap)
+
+
+def period_cap(scene, system) -> float:
+    """The share of a sine dither's period an adaptive step may span: ``PERIOD_CAP`` where
+    a reversal stepped over unseen changes the dynamics (switches that mark jumps, or
+    discrete modes: engine.integrators.adaptive), else 0 (no cap)."""
+    jumps = system.event_jumps or system.update_modes is not None
+    return PERIOD_CAP if jumps and scene.dither in ("sine-velocity", "sine-force") else 0.0
+
+
 @cache
 def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``.
@@ -91,6 +102,7 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                       n_events=system.n_events, events=system.events,
                       observe=observer.observe, record=not sampled_record,
                       needs_mid=observer.needs_mid, graze=system.event_jumps,
+                      period_cap=period_cap(scene, system),
                       sampling=sampled_record,
                       sample=_record_instant, update_modes=system.update_modes)
     stepper = method_module(scene).make_stepper(problem)

@@ -1,7 +1,8 @@
 """Every shipped spec and gallery scene keeps every level's promise (issue 30).
 
 Run: ``.venv/bin/python scripts/promise_check.py [--levels draft standard reference]
-[--only NAME ...] [--store DIR] [--json OUT]``
+[--only NAME ...] [--spec FILE ...] [--store DIR] [--json OUT]`` (``--spec``: your own
+specs instead of the shipped ones)
 
 For each spec of ``specs/`` that is not a gallery scene (``demo-*``) and each gallery scene
 at the small size (``sweeps.gallery.scenes``: Figs. 1, 9, 10, 14 and the lam = 0.5 twin),
@@ -46,6 +47,13 @@ def shipped_specs() -> dict[str, dict]:
     for name, scene in REGISTRY.items():
         out[f"{name}-small"] = scene.spec("small")
     return out
+
+
+def _read(path: str) -> dict:
+    import tomllib
+
+    text = Path(path).read_text()
+    return json.loads(text) if path.endswith(".json") else tomllib.loads(text)
 
 
 def check(specs: dict[str, dict], levels=LEVELS, store=None, workers=2, log=print) -> list:
@@ -130,10 +138,12 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--levels", nargs="+", default=list(LEVELS), choices=LEVELS)
     ap.add_argument("--only", nargs="+", metavar="NAME")
+    ap.add_argument("--spec", nargs="+", metavar="FILE", default=(),
+                    help="check these spec files (TOML or JSON) instead of the shipped ones")
     ap.add_argument("--store", default=None)
     ap.add_argument("--json", default=None, help="write the estimates here")
     args = ap.parse_args(argv)
-    specs = shipped_specs()
+    specs = {Path(f).stem: _read(f) for f in args.spec} if args.spec else shipped_specs()
     if args.only:
         specs = {k: v for k, v in specs.items() if k in args.only}
     rows = check(specs, args.levels, args.store)

@@ -14,7 +14,7 @@ that direction), a discrete mode of the contract. With the Stribeck curve
 A stuck element whose force grows to its share of the Stribeck curve starts slipping in the
 direction of u (``m_i = sgn u``), its force then attracted to ``m_i alpha_i s(u)`` at the rate
 ``C / s(u)``; when u reverses every slipping element sticks again. The model has hysteresis
-with non-local memory: a minor loop closes where it began (tests/engine/test_models_gms.py).
+with non-local memory: a minor loop closes where it began (tests/engine/test_models_reference.py).
 
 Switches: ``u`` (reversal) and, per stuck element, ``alpha_i s(u) - sgn(u) F_i`` (+1 while it
 slips, or inside the band ``|u| < stick_band``); the modes change on them, after the

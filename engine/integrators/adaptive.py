@@ -30,6 +30,13 @@ next step size; this driver does everything else, identically for every method.
   Karnopp band in 3x the steps; from rtol 1e-8 on the two agree within 1e-7, and on the
   LuGre hard cases (tests/hard) DP5's results are unchanged, RODAS's within 1e-8 of the
   scipy references as before.)
+- Under a sine dither, a scene whose switches mark jumps or change modes (``period_cap``)
+  steps at most a quarter of the dither period: within it ``u = v + W sin(omega t)`` has at
+  most one extremum, so a reversal and back inside one step has the one dip the grazing
+  probe looks for. Without the cap, a GMS slider whose elements all slipped took steps of
+  1.1 periods at rtol 1e-5 (nothing in its states felt the dither), stepped over two
+  reversals of u unseen, and kept slipping the wrong way: ``F_mean`` 25 % off, unwarned
+  (tests/engine/test_models_reference.py, ``gms-3-reversals``; docs/ACCURACY.md 5.4).
 - Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
   law's ``update_modes`` gets the step-end state and the index of the switch the step landed
   on (-1: none; a landing may stop a hair short of its root, so the index, not the sign of
@@ -53,9 +60,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import params as P
 from .. import status as S
 from ..jit import njit
-from .events import make_grazing_probe, make_locator, past_corner, sign_change
+from .events import (make_dip_before, make_grazing_probe, make_locator, past_corner,
+                     sign_change)
 from .problem import (
     CTR_EVALS,
     CTR_REJECTED,
@@ -125,6 +134,9 @@ def make_stepper(problem, method: Method) -> Stepper:
     attempt_evals, n_dense = method.attempt_evals, method.n_dense
     locate = make_locator(events, n_ev, dense_eval)
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
+    period_cap = problem.period_cap if n_ev > 0 else 0.0
+    before = make_dip_before(events, n_ev, dense_eval, locate)
+    dips = graze and problem.update_modes is not None   # (the static laws: no need measured)
     first_sample, emit = make_sampler(problem, dense_eval)
     n_g, n_st = max(n_ev, 1), W_METHOD + method.n_state
     modal = problem.update_modes is not None
@@ -145,15 +157,19 @@ def make_stepper(problem, method: Method) -> Stepper:
         mw, Q, Y, G, st = work
         yn, ytmp = Y[0], Y[2]
         events(t + hh, yn, p, sq, G[1])
+        # roots closer than this to the start are crossed, not landed on (module docstring)
+        th_min = max(EVENT_MARGIN, LANDING_FLOOR * max(1.0, abs(t)) / hh)
         if sign_change(G[0], G[1], n_ev):
             coeffs(y, yn, mw, Q)
-            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2])
+            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2], 1.0, th_min)
+            if dips and idx >= 0:   # another event's dip before that root
+                th, idx = before(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th, idx, th_min)
         elif graze:   # a dip through zero and back inside the step
             coeffs(y, yn, mw, Q)
             th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[3], G[4])
             if not th_b < 1.0:
                 return hh, err, -1
-            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b)
+            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b, th_min)
         else:
             return hh, err, -1
         if not (EVENT_MARGIN < th < 1.0 - EVENT_MARGIN
@@ -191,8 +207,12 @@ def make_stepper(problem, method: Method) -> Stepper:
             if sampling and fresh == FRESH_START:
                 st[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
         h = st[W_H]
+        h_cap = math.inf
+        if period_cap > 0.0 and p[P.W] != 0.0 and p[P.OMEGA] > 0.0:
+            h_cap = period_cap * (2.0 * math.pi / p[P.OMEGA])
         t = t0
         while t < t1:
+            h = min(h, h_cap)
             ctr[CTR_EVALS] += prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st)
             while True:
                 rem = t1 - t

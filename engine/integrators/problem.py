@@ -60,6 +60,8 @@ class Problem(NamedTuple):
     record: bool = True    # call record_step (a run-time no-op for an empty rec)
     needs_mid: bool = True # observe reads ymid (else methods may pass any array)
     graze: bool = False    # events mark jumps of rhs: probe steps for grazing crossings
+    period_cap: float = 0.0  # > 0: no adaptive step spans more than this share of a sine
+    #                        dither's period (W != 0; engine.integrators.adaptive)
     sampling: bool = False # call sample at the instants k * cfg.sample_dt (dense output)
     sample: Callable | None = None  # sample(t, y, p, sq, obs, ctr, rec)
     update_modes: Callable | None = None  # update_modes(t, y, p, sq, landed) -> bool: after

@@ -118,6 +118,14 @@ LAW_PROMISE_OVERRIDES = {
 # (scripts/promise_check.py's grid comparison, docs/ACCURACY.md 5.3)
 LAW_PROMISE_OVERRIDES["elastoplastic"] = {"F_mean": {"draft": 5e-2},
                                           "near_slip_fraction": {"draft": 2e-2}}
+# GMS at draft: each element's slip and stick moves the trajectory, as the elasto-plastic
+# events do. On a 50-point sine-dithered slider (three elements, W 0..0.8, omega 10..300,
+# v_ref 0.1 and 0.4, tau 30..60) draft (DP5 rtol 1e-5) against standard was at most 1.6e-2
+# off in v_mean, 1.2e-2 in F_mean, 1.3e-2 in stick_fraction and 1.4e-2 in slip_fraction, all
+# at one point (W 0.4, omega 300, v_ref 0.4), the other 49 within 1e-2; standard against
+# reference within 2e-6 (scripts/promise_check.py --spec, docs/ACCURACY.md 5.4)
+LAW_PROMISE_OVERRIDES["gms"] = {o: {"draft": 5e-2} for o in (
+    "v_mean", "F_mean", "stick_fraction", "slip_fraction", "presliding_fraction")}
 
 
 def promise(level: str, output: str, friction: str | None = None) -> float:

@@ -5,10 +5,10 @@ computes (and warms up, at start) on its own, maps are handed to the drawing pro
 third. Each imports what it needs when first asked, and CPython's import locks hand a thread
 a *partially initialized* module when another thread is importing the same package and that
 package imports itself in a circle (its deadlock avoidance; python/cpython#87681 is one
-report): dask's ``__init__`` imports ``dask.base``, which imports ``dask``. A page opening its first cube (xarray asks for
-``dask.base``) while the explorer's warm-up imported dask was answered 500, "cannot import
-name 'annotate' from partially initialized module 'dask.base'" (CI, 11-29; here 1 server
-start in 3 when its first request was a map).
+report): dask's ``__init__`` imports ``dask.base``, which imports ``dask``. A page opening
+its first cube (xarray asks for ``dask.base``) while the explorer's warm-up imported dask
+was answered 500, "cannot import name 'annotate' from partially initialized module
+'dask.base'" (CI, 11-29; here 5 server starts in 9 when the first request was a map).
 
 Every thread of the server calls :func:`ready` before its work: the first caller imports
 :data:`MODULES` (what the web's threads import, and with them their packages) under a lock,
