@@ -110,3 +110,25 @@ def test_gms_minor_loops_close_where_they_began():
     mid_down = marks[1] + (marks[2] - marks[1]) // 2
     j = marks[2] + np.argmin(abs(x[marks[2]:marks[3]] - x[mid_down]))
     assert abs(F[mid_down] - F[j]) / scale > 0.05
+
+
+def test_under_sine_dither_gms_steps_at_most_a_quarter_period():
+    """engine.kernels.period_cap: while every element slipped nothing in the states felt the
+    dither, draft's steps grew past a whole period and stepped over reversals of u unseen
+    (``gms-3-reversals`` at draft was 2.1e-2 off in v_mean). Within a quarter period u has
+    at most one extremum: the grazing probe's dip."""
+    import math
+
+    case = REFS["gms-3-reversals"]
+    W, omega, v_ref = case["point"]
+    t_end, t_tr = case["window"]
+    p = registry.pack("gms", "slider", case["own"], sigma1=0.0, W=W, omega=omega, v_ref=v_ref,
+                      t_end=t_end, t_transient=t_tr, **case["shared"])
+    scene = Scene.from_params(p, friction="gms", dither="sine-velocity", integrator="dopri5",
+                              outputs=("v_mean", "F_mean"),
+                              sizes=registry.sizes_of("gms", "slider", case["own"]))
+    r = simulate(scene, p, Settings(**LEVELS["draft"]), record=True)
+    assert r.status == 0
+    longest = float(np.max(np.diff(r.t)))
+    quarter = 0.25 * 2.0 * math.pi / omega
+    assert quarter * 0.99 < longest <= quarter * (1 + 1e-12)   # the cap binds, and holds
