@@ -50,9 +50,18 @@ def shipped_specs() -> dict[str, dict]:
 
 
 def _read(path: str) -> dict:
+    """The spec dict of a file, checked first as ``ditherlab plan`` checks it (a bad file
+    is its message, not a traceback)."""
     import tomllib
 
-    text = Path(path).read_text()
+    from sweeps.errors import SpecError
+    from sweeps.spec.load import load_spec
+
+    try:
+        load_spec(path)
+    except SpecError as exc:
+        raise SystemExit(f"promise_check: {exc}") from None
+    text = Path(path).read_text(encoding="utf-8-sig")
     return json.loads(text) if path.endswith(".json") else tomllib.loads(text)
 
 
