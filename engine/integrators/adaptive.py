@@ -31,10 +31,12 @@ next step size; this driver does everything else, identically for every method.
   LuGre hard cases (tests/hard) DP5's results are unchanged, RODAS's within 1e-8 of the
   scipy references as before.)
 - Under a sine dither, a scene whose switches mark jumps or change modes (``period_cap``)
-  steps at most a quarter of the dither period: within it ``u = v + W sin(omega t)`` has at
-  most one extremum, so a reversal and back inside one step has the one dip the grazing
-  probe looks for. Without the cap, a GMS slider whose elements all slipped took steps of
-  1.1 periods at rtol 1e-5 (nothing in its states felt the dither), stepped over two
+  steps at most a quarter of the dither period (the stretch to a segment's end included):
+  within it the dither (``W sin(omega t)``, or the velocity a sine force drives) has at most
+  one extremum, so, while the rest of ``u`` moves little, a reversal of ``u`` and back
+  inside one step is the one dip the grazing probe looks for (a heuristic, not a bound).
+  Without the cap, a GMS slider whose elements all slipped took steps of 1.1 periods at
+  rtol 1e-5 (nothing in its states felt the dither), stepped over two
   reversals of u unseen, and kept slipping the wrong way: ``F_mean`` 25 % off, unwarned
   (tests/engine/test_models_reference.py, ``gms-3-reversals``; docs/ACCURACY.md 5.4).
 - Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
@@ -159,18 +161,20 @@ def make_stepper(problem, method: Method) -> Stepper:
         events(t + hh, yn, p, sq, G[1])
         # roots closer than this to the start are crossed, not landed on (module docstring)
         th_min = max(EVENT_MARGIN, LANDING_FLOOR * max(1.0, abs(t)) / hh)
-        if sign_change(G[0], G[1], n_ev):
+        th, idx = 2.0, -1
+        crossed = sign_change(G[0], G[1], n_ev)
+        if crossed or graze:
             coeffs(y, yn, mw, Q)
+        if crossed:
             th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2], 1.0, th_min)
             if dips and idx >= 0:   # another event's dip before that root
                 th, idx = before(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th, idx, th_min)
-        elif graze:   # a dip through zero and back inside the step
-            coeffs(y, yn, mw, Q)
+        if graze and idx < 0:   # a dip through zero and back inside the step (the probe
+            #                     skips events whose ends differ: one crossed at the start)
             th_b = probe(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[3], G[4])
-            if not th_b < 1.0:
-                return hh, err, -1
-            th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b, th_min)
-        else:
+            if th_b < 1.0:
+                th, idx = locate(t, hh, y, Q, p, sq, G[0], G[3], ytmp, G[2], th_b, th_min)
+        if idx < 0:
             return hh, err, -1
         if not (EVENT_MARGIN < th < 1.0 - EVENT_MARGIN
                 and th * hh > LANDING_FLOOR * max(1.0, abs(t))):
@@ -208,7 +212,8 @@ def make_stepper(problem, method: Method) -> Stepper:
                 st[W_K] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
         h = st[W_H]
         h_cap = math.inf
-        if period_cap > 0.0 and p[P.W] != 0.0 and p[P.OMEGA] > 0.0:
+        if (period_cap > 0.0 and p[P.W] != 0.0 and p[P.OMEGA] > 0.0
+                and math.isfinite(p[P.OMEGA])):
             h_cap = period_cap * (2.0 * math.pi / p[P.OMEGA])
         t = t0
         while t < t1:
@@ -216,7 +221,7 @@ def make_stepper(problem, method: Method) -> Stepper:
             ctr[CTR_EVALS] += prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st)
             while True:
                 rem = t1 - t
-                last = STRETCH * h >= rem
+                last = rem <= min(STRETCH * h, h_cap)
                 hh = rem if last else h
                 ctr[CTR_EVALS] += attempt_evals
                 err = attempt(t, hh, y, yn, p, sq, mw, rtol, atol, st)

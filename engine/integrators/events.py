@@ -187,8 +187,9 @@ def make_dip_before(events, n_events, dense_eval, locate):
     the first that shows a sign change, the earliest root on ``[0, that point]`` beyond
     ``th_min`` replaces ``(th, idx)``. ``gs``, ``gtmp``: scratch. A few
     dense evaluations per landing, for scenes whose switches mark jumps and change modes
-    (``Problem.graze`` and ``update_modes``; on a sine-dithered Stribeck slider it changed
-    no output by more than its noise, for 7 % more time at rtol 1e-8)."""
+    (``Problem.graze`` and ``update_modes``). Not for the static laws: on a sine-dithered
+    Stribeck slider it changed no output by more than its noise, for 7 % more time at rtol
+    1e-8."""
     @njit(error_model="numpy", refcount=False)
     def before(t, hh, y, Q, p, sq, g0, gs, ytmp, gtmp, th, idx, th_min):
         for k in range(1, DIP_SAMPLES + 2):
@@ -200,9 +201,9 @@ def make_dip_before(events, n_events, dense_eval, locate):
             events(t + ths * hh, ytmp, p, sq, gs)
             if sign_change(g0, gs, n_events):
                 th2, idx2 = locate(t, hh, y, Q, p, sq, g0, gs, ytmp, gtmp, ths, th_min)
-                if idx2 >= 0 and th2 < th:
+                if idx2 >= 0:   # (th2 <= ths < th)
                     return th2, idx2
-                return th, idx
+                # only a root too close to the start, crossed: read on
         return th, idx
 
     return before
