@@ -62,3 +62,21 @@ def test_bad_user_code_is_one_line_exit_2_and_nothing_written(tmp_path, module, 
         assert f"{module}.py line" in out.stderr, out.stderr
     assert len(lines) <= 2, out.stderr        # "invalid sweep spec:" and its one fault
     assert not store.exists() or not any(store.rglob("*.nc")), "something was written"
+
+
+@pytest.mark.parametrize("friction, dither, capped", [
+    ("gms", "sine-velocity", True),        # modes: a reversal stepped over changes them
+    ("stribeck", "sine-force", True),      # switches that mark jumps
+    ("lugre", "sine-velocity", False),     # neither: no cap compiled in
+    ("gms", "square-velocity", False),     # the square wave's switches are stops already
+])
+def test_plan_says_where_steps_are_capped_to_a_quarter_dither_period(tmp_path, friction,
+                                                                     dither, capped):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"friction": friction, "dither": dither,
+                                "outputs": ["v_mean"], "grid": {"W": [0.2]}}))
+    out = subprocess.run([str(BIN), "plan", str(spec), "--store", str(tmp_path / "store")],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    numerics = next(ln for ln in out.stdout.splitlines() if ln.startswith("numerics"))
+    assert ("steps of at most 0.25 dither period" in numerics) == capped, numerics
