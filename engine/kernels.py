@@ -89,6 +89,19 @@ def period_cap(scene, system) -> float:
     return PERIOD_CAP if jumps and scene.dither in ("sine-velocity", "sine-force") else 0.0
 
 
+def step_cap_note(scene) -> str:
+    """The step cap of ``scene`` in words for ``ditherlab plan`` and the web's sweep page
+    ("" where none is compiled in, or the method takes fixed steps)."""
+    from .integrators import METHODS
+    from .systems import make_system
+
+    if not scene.integrator or not METHODS[scene.integrator].ADAPTIVE:
+        return ""
+    cap = period_cap(scene, make_system(scene))
+    return f"; steps of at most {cap:g} dither period (a reversal is not stepped over)" \
+        if cap else ""
+
+
 @cache
 def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
     """Build (once per process) the one-point integrator of ``scene``.

@@ -109,20 +109,6 @@ def cmd_serve(args) -> int:
     return serve(store_root(args.store), _compute(args), device=args.device, progress=False)
 
 
-def _capped(scene) -> str:
-    """The step cap under a sine dither, where the law's switches mark jumps or change
-    modes (engine.kernels.period_cap), in words; "" where there is none."""
-    from engine.integrators import METHODS
-    from engine.kernels import period_cap
-    from engine.systems import make_system
-
-    if not METHODS[scene.integrator].ADAPTIVE:
-        return ""
-    cap = period_cap(scene, make_system(scene))
-    return f"; steps of at most {cap:g} dither period (a reversal is not stepped over)" if cap \
-        else ""
-
-
 def _plan_workers(args, plan) -> tuple[int, tuple[float, str]]:
     """The workers a plan's estimate counts, and the start-up it adds: a batch run's jobs
     (no more than blocks) start in JOB_START_S on an idle queue (sweeps.workers.batch)."""
@@ -211,11 +197,12 @@ def cmd_plan(args) -> int:
         on = [k for k, v in plan.effects().items() if v]
         off = [k for k, v in plan.effects().items() if not v]
         print(f"effects    compiled in: {', '.join(on) or '-'}; left out: {', '.join(off) or '-'}")
+        from engine.kernels import step_cap_note
         from engine.systems import describe_states
         print(f"states     {describe_states(plan.scene)}")
         s = plan.numerics.settings
         stops = ("; steps land on every square-wave switch"
-                 if plan.scene.dither == "square-velocity" else "") + _capped(plan.scene)
+                 if plan.scene.dither == "square-velocity" else "") + step_cap_note(plan.scene)
         print(f"numerics   {plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
               f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}{stops}")
     if spec.device == "cuda":

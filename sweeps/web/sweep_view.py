@@ -40,6 +40,8 @@ def map_controls(ds, kind: str, sel: dict) -> dict:
 
 
 def _plan(spec: dict) -> dict | str:
+    from engine.kernels import step_cap_note
+
     from ..planning.plan import make_plan
     from ..spec.load import SpecError, load_spec
 
@@ -55,7 +57,8 @@ def _plan(spec: dict) -> dict | str:
             "on": [k for k, v in effects.items() if v], "off": [k for k, v in effects.items()
                                                                  if not v],
             "numerics": (f"{plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
-                         f"atol={s.atol:g}" if plan.path == "simulate" else "no time integration"),
+                         f"atol={s.atol:g}{step_cap_note(plan.scene)}" if plan.path == "simulate"
+                         else "no time integration"),
             "outputs": list(plan.outputs)}
 
 
