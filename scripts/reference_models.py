@@ -8,8 +8,9 @@ reversal ``u = 0`` and, per stuck element, ``alpha_i s(u) - d F_i = 0`` with ``d
 direction of u over the segment. At each event the integration stops, the modes change by
 which event fired (a reversal sticks every element, an element's event makes it slip in the
 direction of u: the law's definition, not the engine's state-based ``update_modes``) and
-it restarts, so no step crosses a corner. The mean velocity comes from the spring stretch, ``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with
-``x = v_ref t - e``, and the mean friction from a quadrature state ``dQ = F``.
+it restarts, so no step crosses a corner. The mean velocity comes from the spring stretch,
+``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with ``x = v_ref t - e``, and the mean friction
+from a quadrature state ``dQ = F``.
 
 Events are read by ``solve_ivp`` at its step ends only, so a switch crossed and crossed back
 inside one step goes unseen: under dither a step spans at most 1/400 of the dither period

@@ -36,8 +36,8 @@ next step size; this driver does everything else, identically for every method.
   one extremum, so, while the rest of ``u`` moves little, a reversal of ``u`` and back
   inside one step is the one dip the grazing probe looks for (a heuristic, not a bound).
   Without the cap, a GMS slider whose elements all slipped took steps of 1.1 periods at
-  rtol 1e-5 (nothing in its states felt the dither), stepped over two
-  reversals of u unseen, and kept slipping the wrong way: ``F_mean`` 25 % off, unwarned
+  rtol 1e-5 (nothing in its states felt the dither), stepped over two reversals of u
+  unseen, and kept slipping the wrong way: ``F_mean`` 25 % off, unwarned
   (tests/engine/test_models_reference.py, ``gms-3-reversals``; docs/ACCURACY.md 5.4).
 - Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
   law's ``update_modes`` gets the step-end state and the index of the switch the step landed

@@ -130,5 +130,5 @@ def test_under_sine_dither_gms_steps_at_most_a_quarter_period():
     r = simulate(scene, p, Settings(**LEVELS["draft"]), record=True)
     assert r.status == 0
     longest = float(np.max(np.diff(r.t)))
-    quarter = 0.25 * 2.0 * math.pi / omega
+    quarter = 0.25 * 2.0 * math.pi / omega   # engine.kernels.PERIOD_CAP of the period
     assert quarter * 0.99 < longest <= quarter * (1 + 1e-12)   # the cap binds, and holds

@@ -7,6 +7,7 @@ process, an import hook records where every first import of the packages that co
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -53,12 +54,13 @@ def test_every_first_import_of_the_server_threads_is_made_under_the_lock(web_sto
     out = subprocess.run([sys.executable, "-c", PROGRAM, str(web_store["root"]),
                           ",".join(WATCHED), web_store["avg"]],
                          capture_output=True, text=True, timeout=300,
-                         env={**__import__("os").environ, "MPLBACKEND": "Agg"})
+                         env={**os.environ, "MPLBACKEND": "Agg"})
     assert out.returncode == 0, out.stderr[-3000:]
     seen = json.loads(out.stdout.splitlines()[-1])
     assert seen["answers"] == [200, 200]
     first = {name: inside for name, _, inside in reversed(seen["records"])}
     assert {"xarray", "dask", "dask.base", "numba"} <= set(first)   # the hook saw them
+    # the hook records the WATCHED packages only, so this holds MODULES' entries from them
     # (a package's own later imports, numba's while it compiles on the explorer's one
     # thread, are the package's)
     outside = [name for name in MODULES if not first.get(name, True)]
