@@ -103,6 +103,10 @@ class SampleRuns:
         k = len(self.futures)
         return self.costs[k] if k < len(self.order) and not self.given_up else None
 
+    def left_s(self) -> float:
+        """Expected seconds of the re-runs not submitted yet."""
+        return 0.0 if self.given_up else float(sum(self.costs[len(self.futures):]))
+
     def submit_next(self, client, at_most_s: float = 0.0) -> bool:
         """Submit the next re-run as one task, with those after it while their summed
         expected seconds (:meth:`next_cost`) stay within ``at_most_s``: cheap re-runs

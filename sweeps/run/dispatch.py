@@ -1,10 +1,11 @@
-"""Computing a run's blocks: on a dask cluster, one task per worker thread (plus one) in
-flight, after compiling the kernel on every worker (:func:`run_blocks`), a task being one
-block, or several once the workers would ask the submitter for more tasks a second than it
-hands out (sweeps.planning.plan.blocks_per_task); or on threads of this process
-(sweeps.run.local). Either way the longest expected task starts first, the error estimate's
-re-runs among the blocks. Finished blocks go to a :class:`sweeps.run.sink.BlockSink`, which
-also says when to stop."""
+"""Computing a run's blocks: on a dask cluster, two tasks per worker thread in flight (one
+per thread plus one for a brought model: sweeps.run.order.DEPTH), after compiling the kernel
+on every worker (:func:`run_blocks`), a task being one block, or several once the workers
+would ask the submitter for more tasks a second than it hands out
+(sweeps.planning.plan.blocks_per_task), fewer towards the end (sweeps.run.order); or on
+threads of this process (sweeps.run.local). Either way the longest expected task starts
+first, the error estimate's re-runs among the blocks. Finished blocks go to a
+:class:`sweeps.run.sink.BlockSink`, which also says when to stop."""
 from __future__ import annotations
 
 import threading
@@ -19,10 +20,12 @@ from ..workers import task
 from ..workers.deaths import Deaths, crash_line, died_running, killed_worker
 from ..workers.matching import matched
 from ..version import results_fingerprint
-from ..planning.plan import Plan, blocks_per_task, min_task_s, work_s
+from ..planning.plan import Plan, blocks_per_task, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import interrupt
 from .sink import BlockSink
+from .order import (DEPTH, longest_first, outstanding, rerun_first, rerun_group_s,
+                    reruns_left, tail_cap_s)
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
 TICK_S = 0.02      # how often the threads' dispatch looks for finished blocks (x 5)
@@ -94,13 +97,15 @@ def _warm_up_workers(client, plan: Plan, sink: BlockSink) -> bool:
 
 def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
               filler=None, sample=None, compute=None) -> None:
-    """Keep one task per matching worker thread (plus one) in flight, the next submitted
-    as one finishes; once ``sink.should_stop()``, submit no more and collect those in
-    flight (a stop loses no finished work and waits for at most one task per worker). A
-    task computes ``blocks_per_task`` blocks (by the mean block's measured seconds: one
-    until blocks are back), journaled as blocks. Blocks go longest expected first, and
-    the error sample's re-runs (``sample``) among them by the same expected cost
-    (:func:`longest_first`).
+    """Keep DEPTH tasks per matching worker thread in flight (one per thread plus one for a
+    brought model), the next submitted as one finishes; once ``sink.should_stop()``,
+    submit no more and collect those in flight (a stop loses no finished work and waits
+    for at most DEPTH tasks per worker). A task computes ``blocks_per_task`` blocks (by
+    the mean block's measured seconds: one until blocks are back), fewer towards the end
+    (:func:`tail_cap_s`), journaled as blocks. Blocks go longest expected first, and the
+    error sample's re-runs (``sample``) among them by the same expected cost
+    (:func:`longest_first`); the dispatch ends once they are back too
+    (:func:`reruns_left`).
 
     Every REFRESH_S the workers are looked at again (``client`` is a
     :class:`sweeps.workers.matching.MatchedClient`): joiners are checked, a block whose allowed
@@ -111,6 +116,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
 
     cost_of = {b: work_s(plan, plan.blocks[b]) for b in todo}
     queue = list(reversed(longest_first(todo, cost_of)))   # popped from the end
+    queued = [sum(cost_of.values())]   # the queue's expected seconds (tail_cap_s)
     inflight: dict = {}        # future -> (its blocks, the workers it may run on)
     cost = [0.0, 0, 0.0]       # seconds computed, blocks back, their expected seconds
     done = as_completed(loop=client.loop, with_results=True)   # results fetched in dask's
@@ -121,20 +127,27 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
     deaths = Deaths(counting=bool(plan.scene.digests))   # workers a brought model killed
 
     def fill() -> None:
-        window, groups = sum(good.values()) + 1, []
+        threads, groups = sum(good.values()), []
+        window = threads + 1 if deaths.counting else threads * DEPTH
         reruns = sample.running() if sample is not None else 0
         while good and len(inflight) + len(groups) + reruns < window:
+            cap = tail_cap_s(queued[0] + (sample.left_s() if sample is not None else 0.0),
+                             threads, cost)
             if rerun_first(sample, queue, cost_of):
-                sample.submit_next(client, rerun_group_s(cost))
+                sample.submit_next(client, min(rerun_group_s(cost), cap))
                 done.update([sample.last_task])   # its end wakes the loop too
                 reruns += 1
                 continue
             if not queue:
                 break
-            k = blocks_per_task(window - 1, cost[0] / max(cost[1], 1), len(queue))
+            k = blocks_per_task(threads, cost[0] / max(cost[1], 1), len(queue))
             group = [queue.pop()]   # (a block whose task killed a worker goes alone)
-            while len(group) < k and queue and not {group[0], queue[-1]} & deaths.alone:
+            group_s = cost_of[group[0]]
+            while len(group) < k and queue and not {group[0], queue[-1]} & deaths.alone \
+                    and group_s + cost_of[queue[-1]] <= cap:
                 group.append(queue.pop())
+                group_s += cost_of[group[-1]]
+            queued[0] -= group_s
             groups.append(group)
         if groups:   # one message to the scheduler for them all: a submit each costs
             # 3.3x the submitter's CPU (5.4 against 1.7 ms a task; scripts/bench_scale.py)
@@ -150,7 +163,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             inflight.update((f, (group, frozenset(allowed))) for f, group in zip(futures, groups))
             done.update(futures)
         while filler is not None and good and not queue and \
-                len(inflight) + filler.running() < window - 1 and filler.submit_next(client):
+                len(inflight) + filler.running() < threads and filler.submit_next(client):
             done.update([filler.last_task])
 
     while True:
@@ -158,6 +171,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
             good, looked = client.check.matching(), time.monotonic()
             given_up = _resubmit_orphans(client, inflight, good, queue, deaths)
+            queued[0] = sum(cost_of[b] for b in queue)   # (orphans put back)
             for runs in filter(None, (sample, filler)):   # (the error sample's re-runs:
                 runs.harvest()                           # those not in ``done`` taken too)
                 if good:
@@ -169,7 +183,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         stopping = sink.should_stop()
         if not stopping:
             fill()
-        if not inflight and (stopping or not queue):
+        if not inflight and (stopping or not queue and not reruns_left(sample)):
             show_reruns(bar, sample)   # (the estimate counts on from what is shown)
             break
         show_reruns(bar, sample)
@@ -187,6 +201,7 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
             if deaths.counting and killed_worker(f):   # dask gave up: workers kept dying
                 again, lost = deaths.requeue(group, deaths.allowed + 1)
                 queue.extend(again)
+                queued[0] += sum(cost_of[b] for b in again)
                 given_up += lost
                 continue
             result = f.result() if f.status == "error" else result   # an error raises
@@ -224,39 +239,6 @@ def sleep_until_one(done, timeout: float) -> None:
     with condition:
         if not done.has_ready():
             condition.wait(timeout)
-
-
-def outstanding(*samples) -> int:
-    """Tasks the error samples (:class:`sweeps.estimates.error_reruns.SampleRuns`, or None)
-    still need: counted as blocks left when a batch cluster ends idle jobs. Without them,
-    the jobs all ended when the last block was back while re-runs were still to run, and
-    the estimate's gather waited for ever for a worker (seen in test_slurm: the submit hung
-    with the cube published, both jobs cancelled 4 s after they started)."""
-    return sum(s.outstanding() for s in samples if s is not None)
-
-
-def longest_first(todo: list[int], cost_of: dict) -> list[int]:
-    """``todo`` by expected cost, longest first (ties in their order): the work that would
-    otherwise be a lone worker's tail starts early (LPT scheduling)."""
-    return sorted(todo, key=lambda b: -cost_of[b])
-
-
-def rerun_first(sample, queue: list[int], cost_of: dict) -> bool:
-    """True when the next task should be the error sample's next re-run: one is left and
-    it is expected to take at least as long as the next block (``queue[-1]``), or no block
-    is left."""
-    nxt = sample.next_cost() if sample is not None else None
-    return nxt is not None and (not queue or nxt >= cost_of[queue[-1]])
-
-
-def rerun_group_s(cost: list) -> float:
-    """Expected seconds (sweeps.planning.plan.work_s) of the re-runs that share a task: as
-    many as take :func:`sweeps.planning.plan.min_task_s` at the price the blocks back so
-    far measured (``cost``: seconds computed, blocks back, their expected seconds; the
-    price per radian is rough, its ratios less so); one re-run a task until a block is
-    back. The 12 re-runs of 1,000 draft LuGre points (10 ms each), a task each, were the
-    last 0.2 s of a 3.3 s run on 2 workers here."""
-    return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
 
 
 def show_reruns(bar, sample) -> None:

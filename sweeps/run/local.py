@@ -15,8 +15,8 @@ from ..workers.cluster import NOTICE_AFTER_S
 from ..workers.threads import ThreadClient
 from ..planning.plan import Plan, work_s
 from . import interrupt
-from .dispatch import (TICK_S, finish_estimate, longest_first, points_bar, rerun_first,
-                       show_reruns)
+from .dispatch import TICK_S, finish_estimate, points_bar, show_reruns
+from .order import longest_first, rerun_first
 from .sink import BlockSink
 
 # Blocks of a GPU sweep launched at a time, at least (engine.gpu.run: a stream each; more

@@ -73,6 +73,8 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
     plan = make_plan(spec)   # blocks of 4 points that say they took 0.25 s each: 1 s
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
+    monkeypatch.setattr(dispatch, "tail_cap_s", lambda *a: float("inf"))   # (the tail's
+    # smaller tasks: test_the_last_tasks_shrink)
     TASK_POINTS.clear()   # (this test's tasks alone, whatever ran before it)
     sink = _Sink()
     with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
@@ -84,6 +86,34 @@ def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
         np.testing.assert_array_equal(record.index, plan.blocks[b])
         np.testing.assert_array_equal(record.outputs["F_mean"], points[plan.blocks[b], 1])
     assert max(TASK_POINTS) == 3 * 4 and sum(TASK_POINTS) == plan.n_points   # 3 blocks a task
+
+
+@pytest.mark.timeout(300)
+def test_the_last_tasks_shrink(monkeypatch):
+    """Towards the end a task takes at most half of each thread's share of what is left
+    (sweeps.run.order.tail_cap_s): groups of 3 blocks while much is left, and single
+    blocks once fewer blocks are left than tasks fit in flight (3 threads x DEPTH 2),
+    so that no thread runs a last group while the others idle. (30 blocks of one expected
+    cost c: with k left the cap is k c / 6, below 2 c once k < 12.)"""
+    from distributed import Client, LocalCluster
+
+    from sweeps.workers.matching import matched
+
+    spec = parse_spec({"name": "tail", "friction": "lugre", "dither": "sine-velocity",
+                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
+                       "grid": {"W": [0.5], "omega": [100.0],   # blocks of equal cost
+                                "v_ref": {"start": 0.1, "stop": 0.5, "num": 120}}})
+    plan = make_plan(spec)
+    monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 blocks a task
+    monkeypatch.setattr(task, "compute_block", _instant)
+    TASK_POINTS.clear()
+    sink = _Sink()
+    with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
+                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
+        dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
+    assert sorted(sink.got) == list(range(len(plan.blocks)))
+    assert sum(TASK_POINTS) == plan.n_points and max(TASK_POINTS) == 3 * 4, TASK_POINTS
+    assert TASK_POINTS[-6:] == [4] * 6, TASK_POINTS   # the last tasks: a block each
 
 
 RELEASED = threading.Event()   # the re-runs' gate (the workers are threads of this process)
@@ -99,23 +129,28 @@ def _blocks_now_reruns_later(scene, points, p, settings, index, sizes=None, kind
 class _Jobs:
     """A batch cluster's Compute as the dispatch sees it: told, every look at the workers,
     how many tasks are left (compute.shrink), which it would end idle jobs below. Records
-    each count with the error sample's re-runs still to come at that moment."""
+    each count with the error sample's re-runs still to come at that moment and whether
+    every block was back; lets the re-runs go (RELEASED) at the first look after the last
+    block."""
 
-    def __init__(self, sample):
-        self.sample, self.told = sample, []
+    def __init__(self, sample, sink, n_blocks: int):
+        self.sample, self.sink, self.n_blocks, self.told = sample, sink, n_blocks, []
 
     def shrink(self, left: int) -> None:
-        self.told.append((left, self.sample.outstanding()))
+        blocks_back = len(self.sink.got) == self.n_blocks
+        self.told.append((left, self.sample.outstanding(), blocks_back))
+        if blocks_back:
+            RELEASED.set()
 
 
 @pytest.mark.timeout(300)
 def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
-    """The error sample's re-runs run among the blocks and may outlast them; the estimate
-    then gathers them. A batch cluster told "no tasks left" when the last block was back
+    """The error sample's re-runs run among the blocks and may outlast them; the dispatch
+    waits for them too. A batch cluster told "no tasks left" when the last block was back
     ended its idle jobs, and the gather waited for ever for a worker (test_slurm hung so,
     the cube published, both jobs cancelled 4 s after they started). Here the re-runs
-    wait until the dispatch has returned, so that they are certainly still running at its
-    last look at the workers."""
+    wait until the dispatch has looked at the workers with every block back, so that they
+    are certainly still running then."""
     from distributed import Client, LocalCluster
 
     from sweeps.estimates.error_reruns import SampleRuns
@@ -127,12 +162,12 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
                                                            "num": 20}}})
     plan = make_plan(spec)
     sample = SampleRuns(plan)
-    jobs = _Jobs(sample)
+    sink = _Sink()
+    jobs = _Jobs(sample, sink, len(plan.blocks))
     RELEASED.clear()   # (a second run of this test in one process gates its re-runs too)
     monkeypatch.setattr(task, "compute_block", _blocks_now_reruns_later)
     monkeypatch.setattr(dispatch, "REFRESH_S", -1.0)   # a look at the workers every turn,
     # whatever the clock's resolution
-    sink = _Sink()
     # more threads than re-runs: the blocked re-runs leave threads to the blocks
     with LocalCluster(n_workers=1, threads_per_worker=len(sample.order) + 4,
                       processes=False, **LOOPBACK_CLUSTER) as cluster, \
@@ -142,7 +177,10 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
                                _Bar(), sample=sample, compute=jobs)
         finally:
             RELEASED.set()
+        finished_at_return = sample.finished()
         sample.gather(client)
     assert sorted(sink.got) == list(range(len(plan.blocks)))
-    assert jobs.told and all(left >= to_come for left, to_come in jobs.told), jobs.told
-    assert jobs.told[-1][1] > 0   # the last look came with re-runs still running
+    assert jobs.told and all(left >= to_come for left, to_come, _ in jobs.told), jobs.told
+    assert any(back and to_come > 0 for _, to_come, back in jobs.told), jobs.told   # a look
+    # came with every block back and re-runs still running
+    assert finished_at_return == len(sample.order)   # the dispatch returned after them

@@ -161,7 +161,7 @@ def test_reruns_group_to_a_task_of_measured_seconds(monkeypatch):
     measured (2 s measured for 20 s expected: 10x cheaper than priced); one re-run a task
     until a block is back."""
     from sweeps.planning.plan import MIN_TASK_ENV, MIN_TASK_S
-    from sweeps.run.dispatch import rerun_group_s
+    from sweeps.run.order import rerun_group_s
 
     monkeypatch.delenv(MIN_TASK_ENV, raising=False)   # (the default floor)
     assert rerun_group_s([0.0, 0, 0.0]) == 0.0
