@@ -144,7 +144,7 @@ sweeps.workers sweeps.workers.cluster sweeps.workers.compute sweeps.workers.deat
 sweeps.workers.matching sweeps.workers.local_start sweeps.workers.task sweeps.workers.threads
 sweeps.estimates sweeps.estimates.error_estimate sweeps.estimates.error_reruns
 sweeps.run sweeps.run.dispatch sweeps.run.interrupt sweeps.run.lease_holder sweeps.run.local
-sweeps.run.new_cube sweeps.run.outcome sweeps.run.preparation sweeps.run.quiet
+sweeps.run.new_cube sweeps.run.order sweeps.run.outcome sweeps.run.preparation sweeps.run.quiet
 sweeps.run.refined sweeps.run.sink sweeps.run.submit
 """.split()
 
@@ -164,7 +164,8 @@ def test_the_computing_path_is_the_reviewed_list():
     """The path's modules are those of COMPUTING_PATH: none joined or left it unreviewed;
     the display, the time history, the batch options and the tests' gates are not on it
     (2026-11-27: 53 modules of store/ and sweeps/, 54 before issue 38; +1: sweeps.workers.local_start, split from sweeps.workers.cluster; 2026-11-28 +1: sweeps.workers.deaths, which decides
-    that a block that kept killing its workers is journaled FAILED)."""
+    that a block that kept killing its workers is journaled FAILED; 2026-11-30 +1:
+    sweeps.run.order, split from sweeps.run.dispatch: which blocks a task computes)."""
     path = {name for name in version.computing_path() if name.split(".")[0] != "engine"}
     joined, left = sorted(path - set(COMPUTING_PATH)), sorted(set(COMPUTING_PATH) - path)
     assert not joined and not left, \
