@@ -1,11 +1,11 @@
 """The error estimate of every simulated cube, and the gate that makes it loud.
 
-After a sweep, a sample of its points is integrated again one accuracy level finer
-(draft -> standard -> reference -> reference with tolerances / 100; explicit numerics ->
-the same method with tolerances / 100 or 4x the steps) and the observed change per output
-is compared with what the sweep's level promises for that output
-(:func:`sweeps.spec.accuracy.promise`: absolute for time fractions, relative otherwise; explicit
-numerics are held to the ``standard`` promise). The result is stored in the cube's
+After a sweep, a sample of its points is integrated again 100x more accurately (the same
+integrator at tolerances / 100, or 4x the steps of a fixed-step method; the next level up
+where that is the same run or another integrator: :func:`finer_numerics`) and the observed
+change per output is compared with what the sweep's level promises for that output
+(:func:`sweeps.spec.accuracy.promise`: absolute for time fractions, relative otherwise;
+explicit numerics are held to the ``standard`` promise). The result is stored in the cube's
 ``error_estimate`` attribute::
 
     {"compared_with": "reference", "sample_points": 12, "level": "standard",
@@ -24,6 +24,7 @@ where the level is converged it is close to the true error; where it is not, it 
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -42,16 +43,47 @@ REL_FLOOR = 1e-3
 
 
 def finer_numerics(plan: Plan) -> Numerics:
-    """The next level up, or the same integrator at tolerances / 100 at the top. On the
-    CPU whatever the sweep's device: a dozen points, each on one GPU thread 10-24x slower
-    than on a core (docs/GPU.md, an H200), would be a GPU sweep's tail."""
-    level = FINER.get(plan.numerics.label)
-    if level is not None:
-        return numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
-    s = plan.numerics.settings
+    """The numerics the error sample is re-run at: the sweep's own integrator at tolerances
+    / 100 (4x the steps of a fixed-step method), labelled ``<level>/100``, or the next level
+    up where that is the same run (standard -> reference on DP5) or runs another integrator
+    (an independent method). On the CPU whatever the sweep's device: a dozen points, each on
+    one GPU thread 10-24x slower than on a core (docs/GPU.md, an H200), would be a GPU
+    sweep's tail.
+
+    A run 100x more accurate measures the level's error to about 1 %; the next level was
+    at times no check at all, at others a needless price: a static law's draft runs at its
+    standard's tolerances (sweeps.spec.accuracy.STATIC_RTOL_PER_BAND), so its estimate
+    compared two identical runs and always said 0; an elasto-plastic sweep's reference is
+    DP5 at rtol 1e-12, 10^4 x standard's, and its 12 re-runs took 4.5 % of Fig. 14's
+    workers' time where rtol 1e-10 took 2.1x less and changed the estimate by at most 1.2 %
+    of itself (docs/ACCURACY.md 5.5)."""
+    s, integrator = plan.numerics.settings, plan.numerics.integrator
     finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100, device="cpu",
                     steps_per_period=s.steps_per_period * 4, h=s.h / 4)
-    return Numerics(plan.numerics.integrator, finer, f"{plan.numerics.label}/100")
+    level = FINER.get(plan.numerics.label)
+    if level is not None:
+        nxt = numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
+        nxt = replace(nxt, settings=replace(nxt.settings, device="cpu"))
+        if nxt.integrator != integrator or _same(_read(integrator, nxt.settings),
+                                                 _read(integrator, finer)):
+            return nxt
+    return Numerics(integrator, finer, f"{plan.numerics.label}/100")
+
+
+def _same(a: tuple, b: tuple) -> bool:
+    """Settings read alike (1e-8 / 100 is not 1e-10 in binary)."""
+    return all(x == y if isinstance(x, str) else math.isclose(x, y, rel_tol=1e-12)
+               for x, y in zip(a, b))
+
+
+def _read(integrator: str, s) -> tuple:
+    """The settings ``integrator`` reads (engine.integrators: an adaptive method its
+    tolerances, a fixed-step one its step)."""
+    from engine.integrators import METHODS
+
+    if METHODS[integrator].ADAPTIVE:
+        return s.rtol, s.atol, s.atol_units, s.max_steps
+    return s.steps_per_period, s.h, s.max_steps
 
 
 def sample_index(shape: tuple[int, ...], coords: list[np.ndarray], seed: str,

@@ -214,5 +214,5 @@ def test_a_refined_gpu_sweep_runs_its_levels_and_its_estimate(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     assert out["state"] == "done" and "cluster_s" not in out["timings"], out
-    assert out["estimate"]["compared_with"] == "standard", out
+    assert out["estimate"]["compared_with"] == "draft/100", out
     assert out["estimate"]["sample_points"] > 0 and out["estimate"]["warnings"] == [], out

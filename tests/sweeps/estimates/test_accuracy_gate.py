@@ -5,6 +5,8 @@ command line wherever a change exceeds it. Nothing wrong passes in silence.
 Here the promises and the sample; the gate seen from the command line is
 tests/e2e/test_accuracy_gate.py."""
 
+import math
+
 import numpy as np
 
 from sweeps.estimates import error_estimate as errors
@@ -31,3 +33,43 @@ def test_sample_is_stratified_deterministic_and_has_the_corners():
     assert len(rows) >= 8            # spread over W, not bunched (Latin hypercube)
     small = errors.sample_index((2, 3, 1, 1), [[0, 1], [1, 2, 3], [0.1], [0.1]], "")
     assert np.array_equal(small, np.arange(6))                 # a small grid: every point
+
+
+def _finer(spec_changes: dict, level: str):
+    from sweeps.planning.plan import make_plan
+    from sweeps.spec import parse_spec
+
+    spec = {"name": "finer", "method": "simulate", "friction": "lugre",
+            "dither": "sine-velocity", "outputs": ["F_mean"], "accuracy": level,
+            "grid": {"W": [0.0, 0.5], "omega": [100.0, 300.0], "v_ref": [0.4]},
+            **spec_changes}
+    plan = make_plan(parse_spec(spec))
+    return plan.numerics, errors.finer_numerics(plan)
+
+
+def test_the_sample_is_rerun_a_hundred_times_tighter_never_at_the_same_numerics():
+    """The comparison run is 100x tighter than the level it checks (its error then about
+    1 % of the change it measures): never the same run, which would measure nothing, and
+    not 10^4x tighter at 2x the price. Before, the next level was taken whatever it was:
+    a static law's draft runs at its standard's tolerances (STATIC_RTOL_PER_BAND) and an
+    elasto-plastic draft asked for phase shares too (PHASE_LEVELS), so their estimates
+    compared two identical runs and said 0; an elasto-plastic standard was compared at
+    rtol 1e-12 (its reference, ELASTOPLASTIC_LEVELS)."""
+    cases = [({"friction": "coulomb"}, "draft"), ({"friction": "stribeck"}, "draft"),
+             ({"friction": "elastoplastic", "outputs": ["slip_fraction"]}, "draft"),
+             ({"friction": "elastoplastic"}, "standard"), ({}, "draft"), ({}, "standard"),
+             ({}, "reference"), ({"params": {"sigma0": 1e6}}, "draft"),
+             ({"params": {"sigma0": 1e6}}, "standard")]
+    for changes, level in cases:
+        own, finer = _finer(changes, level)
+        assert finer.integrator == own.integrator, (changes, level)
+        assert math.isclose(finer.settings.rtol, own.settings.rtol / 100, rel_tol=1e-9), \
+            (changes, level, own, finer)
+        assert math.isclose(finer.settings.atol, own.settings.atol / 100, rel_tol=1e-9), \
+            (changes, level, own, finer)
+        assert finer.settings.device == "cpu"
+    # where the next level is exactly that run, it keeps its name
+    assert _finer({}, "standard")[1].label == "reference"
+    assert _finer({"params": {"sigma0": 1e6}}, "draft")[1].label == "standard"
+    assert _finer({"friction": "elastoplastic"}, "standard")[1].label == "standard/100"
+    assert _finer({"friction": "coulomb"}, "draft")[1].label == "draft/100"
