@@ -14,6 +14,7 @@ import numpy as np
 import store
 from engine import status as S
 from store.catalogue_db import FINAL
+from store.lease import owner_tag
 
 from .lease_holder import Lease, wait_while_held
 from ..planning.plan import Plan
@@ -93,6 +94,22 @@ def take_lease(plan: Plan, catalogue, owner, stop, progress):
         # queued again (a serve stopped) or stalled (the holder died): take it over
         progress.note(f"sweep {plan.sweep_id}: {row['owner'] or 'its runner'} stopped "
                       f"({catalogue.live_state(row)}); taking it over")
+
+
+def held_elsewhere(catalogue, sweep, sweep_id: str, owner: str | None) -> bool:
+    """Another live process runs the sweep now: this call will attach to it and compute
+    nothing (:func:`take_lease`), so it starts no cluster early (it did: a second submitter
+    started two worker processes, on the cores the run it waited for was using, and
+    stopped them unused). A sweep without a folder is not looked up (an unknown id makes
+    the catalogue scan the store)."""
+    if not sweep.root.exists():
+        return False
+    try:
+        row = catalogue.get(sweep_id)
+    except LookupError:
+        return False
+    return row["state"] == "running" and row.get("owner") != (owner or owner_tag()) and \
+        catalogue.alive(row)
 
 
 def overlaps_estimate(plan: Plan, sweep) -> bool:

@@ -33,7 +33,7 @@ from .local import run_blocks_local
 from .lease_holder import LEASE_LOST
 from .outcome import SubmitResult, abort, attached_result, final_result
 from .preparation import (blocks_to_run, blocks_unjournaled, check_space, checked_blocks,
-                          overlaps_estimate, republish, take_lease)
+                          held_elsewhere, overlaps_estimate, republish, take_lease)
 from ..planning.plan import Plan, work_s
 from .quiet import display_of
 from ..estimates.error_reruns import SampleRuns, attach_saved_estimate, needs_estimate
@@ -100,8 +100,9 @@ class Submission:
     def run(self, max_blocks: int | None) -> SubmitResult:
         try:
             unjournaled = blocks_unjournaled(self.plan, self.journal)
-            if unjournaled != []:   # (all journaled: failed points, the estimate: after the read)
-                self.start_early(unjournaled)
+            if unjournaled != [] and not held_elsewhere(self.catalogue, self.sweep,
+                                                        self.plan.sweep_id, self.owner):
+                self.start_early(unjournaled)   # (all journaled: after the read)
             cube = self.read()
             if self.complete(cube):
                 return self.result(cube, blocks_run=0)

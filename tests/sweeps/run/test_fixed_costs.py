@@ -223,6 +223,30 @@ def test_the_cluster_starts_before_the_store_is_read_for_a_new_and_a_resumed_swe
         assert _early_starts(plan, store, m) == ["read"]
 
 
+def test_a_submitter_that_will_attach_starts_no_cluster(tmp_path, monkeypatch):
+    """A sweep another live process runs: a second submit attaches to it and computes
+    nothing, so it starts no workers on the cores that run is using (it started two and
+    stopped them unused). Once the holder is gone, the start overlaps the read again."""
+    import os
+
+    import store as store_module
+    from store.lease import owner_tag
+    from sweeps.run.submit import submit
+    from sweeps.workers.compute import Compute
+
+    plan = make_plan(parse_spec(SPEC))
+    store = tmp_path / "store"
+    submit(plan, store, Compute(workers=1), max_blocks=3)   # small: on a thread here
+    catalogue, host = store_module.Catalogue(store), owner_tag().rpartition(":")[0]
+    got, _ = catalogue.acquire(plan.sweep_id, f"{host}:{os.getppid()}")   # a live process
+    assert got
+    with monkeypatch.context() as m:
+        assert _early_starts(plan, store, m) == ["read"]
+    catalogue.update(plan.sweep_id, owner=f"{host}:999999999")   # no such process: stalled
+    with monkeypatch.context() as m:
+        assert _early_starts(plan, store, m) == [("start", len(plan.blocks) - 3), "read"]
+
+
 class _Finished:
     """A finished task as the dispatch sees one: its status and its exception."""
 
