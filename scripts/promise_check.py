@@ -7,7 +7,7 @@ specs instead of the shipped ones)
 For each spec of ``specs/`` that is not a gallery scene (``demo-*``) and each gallery scene
 at the small size (``sweeps.gallery.scenes``: Figs. 1, 9, 10, 14 and the lam = 0.5 twin),
 the sweep is run at each accuracy level (the spec's ``accuracy`` replaced) with the
-service's own error estimate (sweeps.estimate: a stratified sample re-run one level finer,
+service's own error estimate (sweeps.estimate: a stratified sample re-run 100x more accurately,
 compared per output with what the level promises, sweeps.accuracy.promise), and every
 point of a level's cube is compared with the next level's cube the same way. A level keeps
 its promise on a spec when neither records a warning. The averaged and harmonic-

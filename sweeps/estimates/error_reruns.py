@@ -1,7 +1,7 @@
 """Running the error estimate of a finished simulated run (sweeps.estimates.error_estimate):
-the error sample re-run one accuracy level finer on the dask client, compared, attached to
-the cube and saved beside it as ``<sweep>/error_estimate.json``, so that no cube goes
-unchecked."""
+the error sample re-run 100x more accurately (finer_numerics) on the dask client,
+compared, attached to the cube and saved beside it as ``<sweep>/error_estimate.json``, so
+that no cube goes unchecked."""
 from __future__ import annotations
 
 import json
@@ -49,13 +49,12 @@ def estimate_into(plan: Plan, client, cube, sweep, timings: dict, started=None,
 
 
 class SampleRuns:
-    """The error sample's re-runs one accuracy level finer (error_estimate.py), costliest
-    first, submitted a task at a time: one re-run a task, or several cheap ones together
+    """The error sample's re-runs, 100x more accurately (error_estimate.finer_numerics),
+    costliest first, a task at a time: one re-run a task, or several cheap ones together
     (:meth:`submit_next`). The sample is drawn from the sweep id, so it is known when the
     plan is made: an exhaustive sweep's dispatch runs the re-runs among its blocks,
     longest expected first (:meth:`next_cost`), and a refined sweep hands them to the
-    dispatch as filler for the workers idling at the tail of each level
-    (error_estimate.sample).
+    dispatch as filler for the workers idling at the tail of each level.
 
     ``client`` is a dask client or a :class:`sweeps.workers.threads.ThreadClient`."""
 
@@ -140,18 +139,19 @@ class SampleRuns:
             self.allowed[future] = frozenset(workers)
         return future
 
-    def rescue(self, client, good: dict) -> None:
+    def rescue(self, client, good: dict) -> list:
         """Submit again the re-run tasks whose allowed workers have all gone (batch jobs
         ended, or workers that died running them: sweeps.workers.deaths), on the workers
-        in ``good`` now (none: they wait). For a brought model, a group whose tasks killed
-        more workers than dask allows is given up (``given_up``: :meth:`gather` raises it,
-        and the estimate says so in its warning); deaths are not counted for the engine's
-        own models (sweeps.workers.deaths.Deaths)."""
+        in ``good`` now (none: they wait); returns the new tasks. For a brought model, a
+        group whose tasks killed more workers than dask allows is given up (``given_up``:
+        :meth:`gather` raises it, and the estimate says so in its warning); deaths are not
+        counted for the engine's own models (sweeps.workers.deaths.Deaths)."""
         if not good:
-            return
+            return []
         orphans = [(g, f) for g, (f, _) in enumerate(self.groups)
                    if f in self.allowed and not f.done() and not self.allowed[f] & good.keys()]
         died = died_running(client, [f for _, f in orphans]) if self.deaths.counting else {}
+        new = []
         for g, future in orphans:
             client.cancel(future)
             _, lost = self.deaths.requeue([g], None if died is None else died.get(future.key, 0))
@@ -159,8 +159,10 @@ class SampleRuns:
                 self.given_up = f"a re-run was given up: {crash_line(self.deaths.of_block[g])}"
                 continue
             group = self.groups[g][1]
-            self.groups[g] = (self._submit(client, group, list(good)), group)
-            self.futures.update((i, self.groups[g][0]) for i in group)
+            new.append(self._submit(client, group, list(good)))
+            self.groups[g] = (new[-1], group)
+            self.futures.update((i, new[-1]) for i in group)
+        return new
 
     def gather(self, client, tick=None, idle=None) -> BlockRecord:
         """Every re-run's result, in sample order, as one record (the rest submitted

@@ -20,8 +20,10 @@ def reruns_left(sample) -> bool:
     waits for them with the blocks' ``as_completed``, which wakes it as each ends, where
     the estimate's gather (sweeps.estimates.error_reruns) looks every 50 ms. (The cheap
     sweep of scripts/bench_sweep.py ended 0.09-0.15 s after its last block, 4-6 % of its
-    points' time.) A re-run given up is not waited for: the gather says why."""
-    return sample is not None and (sample.running() > 0 or sample.next_cost() is not None)
+    points' time.) Once one is given up the others are not waited for: the gather cancels
+    them and says why."""
+    return sample is not None and not sample.given_up and \
+        (sample.running() > 0 or sample.next_cost() is not None)
 
 
 def outstanding(*samples) -> int:
@@ -70,3 +72,16 @@ def rerun_group_s(cost: list) -> float:
     back. The 12 re-runs of 1,000 draft LuGre points (10 ms each), a task each, were the
     last 0.2 s of a 3.3 s run on 2 workers here."""
     return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
+
+
+def cancel_waiting(client, inflight: dict, threads: int) -> None:
+    """On a stop: cancel the tasks submitted after the oldest ``threads`` not finished
+    (those waiting at a worker behind a running one, DEPTH), so that a stop waits for at
+    most one task per thread, as it did before tasks waited at the workers. Their blocks
+    stay to compute (a resume computes them); a finished task is never cancelled."""
+    running = [f for f in inflight if f.status == "pending"]
+    waiting = running[max(threads, 1):]
+    if waiting:
+        client.cancel(waiting)
+        for f in waiting:
+            inflight.pop(f)

@@ -1,5 +1,5 @@
 """Every shipped spec and gallery scene (small size) keeps every level's promise: the
-service's own error estimate (a sample re-run one level finer, sweeps.estimate) records no
+service's own error estimate (a sample re-run 100x more accurately, sweeps.estimate) records no
 warning at draft, standard or reference (scripts/promise_check.py; issue 30: the demo's
 first output was a warning that F_mean changed more than draft promises). Long: about
 seven sweeps of up to 49 points at each of three levels."""

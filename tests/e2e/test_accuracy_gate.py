@@ -1,4 +1,4 @@
-"""The error estimate is a gate (issue 9): a sample re-run one level finer, each output's
+"""The error estimate is a gate (issue 9): a sample re-run 100x more accurately, each output's
 change compared with what the level promises, and a warning in the cube and on the
 command line wherever a change exceeds it. Nothing wrong passes in silence.
 

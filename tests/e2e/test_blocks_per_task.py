@@ -180,7 +180,59 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
         finished_at_return = sample.finished()
         sample.gather(client)
     assert sorted(sink.got) == list(range(len(plan.blocks)))
-    assert jobs.told and all(left >= to_come for left, to_come, _ in jobs.told), jobs.told
-    assert any(back and to_come > 0 for _, to_come, back in jobs.told), jobs.told   # a look
-    # came with every block back and re-runs still running
+    assert any(back and left >= to_come > 0 for left, to_come, back in jobs.told), \
+        jobs.told   # a look came with every block back and re-runs still running, and the
+    # jobs were told of them (left counts nothing else then)
     assert finished_at_return == len(sample.order)   # the dispatch returned after them
+
+
+HELD = threading.Event()   # the stop test's gate: its running tasks end once it is set
+
+
+def _held(scene, points, p, settings, index, sizes=None, kind="block"):
+    HELD.wait()   # (set by the sink once the dispatch has seen the stop and gone on)
+    return _instant(scene, points, p, settings, index, sizes)
+
+
+class _StoppingSink(_Sink):
+    """Asked ``should_stop`` once per turn of the dispatch: no at the first (the first
+    tasks are submitted), yes from the second on (a cancel); at the third, the stop has
+    been handled, and the running tasks are let go."""
+
+    def __init__(self):
+        super().__init__()
+        self.asked = 0
+
+    def should_stop(self) -> bool:
+        self.asked += 1
+        if self.asked >= 3:
+            HELD.set()
+        return self.asked >= 2
+
+
+@pytest.mark.timeout(300)
+def test_a_stop_collects_one_task_per_thread_not_those_waiting(monkeypatch):
+    """Two tasks per thread are in flight (sweeps.run.order.DEPTH); on a stop the ones
+    waiting behind a running task are cancelled, so a stop (a cancel, serve's shutdown, a
+    lost lease) waits for one task per thread, as before tasks waited at the workers. The
+    running ones finish and are journaled; the rest stay to compute."""
+    from distributed import Client, LocalCluster
+
+    from sweeps.workers.matching import matched
+
+    spec = parse_spec({"name": "stop", "friction": "lugre", "dither": "sine-velocity",
+                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
+                       "grid": {"W": [0.5], "omega": [100.0],
+                                "v_ref": {"start": 0.1, "stop": 0.5, "num": 40}}})
+    plan = make_plan(spec)
+    HELD.clear()
+    monkeypatch.setattr(task, "compute_block", _held)
+    sink = _StoppingSink()
+    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
+        try:
+            dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink,
+                               _Bar())
+        finally:
+            HELD.set()
+    assert len(sink.got) == 2, sorted(sink.got)   # the two running; two more were waiting

@@ -56,7 +56,7 @@ def test_killed_refined_sweep_resumes_to_the_same_cube(tmp_path, env, gate):
     proc = subprocess.Popen([str(BIN), "submit", str(path), "-q", "--store", str(crashed)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
                             start_new_session=True)
-    gate.let(3)   # as many tasks as are in flight (2 workers + 1): a block among them
+    gate.let(3)   # fewer tasks than are in flight (2 workers x 2): a block among them
     t0 = time.monotonic()
     while len(store.Journal(journal).files()) < 1:
         assert proc.poll() is None and time.monotonic() - t0 < 300, "no blocks journaled"
