@@ -7,7 +7,8 @@ adopts a cube or migrates a catalogue on disk.
 A key is a sweep id, a unique id prefix or a sweep name. A name given to several sweeps
 (a spec edited and submitted again under the same name) means the one made by the
 installed engine when exactly one is (stale sweeps are never served as current, README
-"Which engine made this cube"); otherwise the lookup is refused with the candidates listed.
+"Which engine made this cube"), and among those the one of a brought model's source as it
+is now (:func:`model_changed`); otherwise the lookup is refused with the candidates listed.
 """
 from __future__ import annotations
 
@@ -49,6 +50,8 @@ def resolve_sweep(root: Path, key: str, need_cube: bool = True) -> tuple[str, Pa
         raise UserError(f"no sweep {key!r} in store {root} (see `ditherlab status`)")
     if len(rows) > 1:
         current = [r for r in rows if not is_stale(r)]
+        if len(current) > 1:   # an edited brought model: the sweep of its source as it is
+            current = [r for r in current if not model_changed(r)] or current
         if len(current) != 1:
             raise AmbiguousSweepError(_ambiguity(key, current or rows))
         rows = current
@@ -92,6 +95,30 @@ def is_stale(row: dict, ds=None) -> bool:
     try:
         spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
     except (SpecError, ValueError, TypeError):
+        return True
+    return spec.sweep_id != row["sweep_id"]
+
+
+def model_changed(row: dict) -> bool:
+    """The sweep brings a model by import path (``module:Name``) whose source is not the
+    one it was made with: its spec no longer hashes to its id, which covers the model's
+    source (sweeps.spec.models.Spec.sweep_id); also when the model cannot be read here.
+    False for the built-in models. A name given again after the user edited their law
+    meant two current sweeps and was refused; it now means the one of the source as it is
+    (only asked when a name is ambiguous: reading the spec imports the model)."""
+    from engine.registry import is_import_path
+
+    try:
+        raw = json.loads(row["spec_json"])
+    except (KeyError, TypeError, ValueError):
+        return False
+    if not any(is_import_path(str(raw.get(k, ""))) for k in ("friction", "system")):
+        return False
+    from .spec.load import load_spec
+
+    try:
+        spec = load_spec(raw, max_points=max(int(row["n_points"]), 1))
+    except Exception:  # noqa: BLE001 -- the user's module: moved, broken, not importable
         return True
     return spec.sweep_id != row["sweep_id"]
 

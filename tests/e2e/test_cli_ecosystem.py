@@ -177,3 +177,43 @@ def test_status_of_one_sweep_imports_no_numerics(avg_store):
     key = sweeps.load_spec(AVERAGED).sweep_id   # the name may be shared by now (see above)
     said, heavy = _status_in_a_child("status", key, "--store", str(avg_store))
     assert "state: done" in said and heavy == "[]"
+
+
+def test_a_name_given_again_after_editing_a_brought_law_means_its_source_as_it_is(tmp_path):
+    """A user edits their law (docs/examples/mylab) and submits the same spec again: a new
+    sweep (the id covers the model's source) under the same name. The name was refused as
+    naming two current sweeps; it now means the sweep of the source as it is now
+    (sweeps.lookup.model_changed), and once that source is gone too it is refused again."""
+    import json
+    import os
+    import shutil
+
+    root = Path(__file__).resolve().parents[2]
+    shutil.copytree(root / "docs" / "examples" / "mylab", tmp_path / "mylab",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    (tmp_path / "spec.json").write_text(json.dumps({
+        "name": "edited-law", "friction": "mylab.laws:MaxwellSlip", "dither": "none",
+        "outputs": ["v_mean"], "accuracy": "draft", "time": {"t_end": 2.0, "t_transient": 1.0},
+        "params": {"gms": {"k": [100.0], "alpha": [1.0], "C": 20.0}},
+        "grid": {"v_ref": [0.1, 0.2]}}))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+
+    def ditherlab(*args):
+        return subprocess.run([str(Path(sys.executable).parent / "ditherlab"), *args,
+                               "--store", str(tmp_path / "runs")], cwd=tmp_path, env=env,
+                              capture_output=True, text=True, timeout=300)
+
+    laws = tmp_path / "mylab" / "laws.py"
+    ids = []
+    for edit in ("", "\n# the user's edit\n"):
+        laws.write_text(laws.read_text() + edit)
+        out = ditherlab("submit", "spec.json", "--detach")   # queued: nothing computed
+        assert out.returncode == 0, out.stderr
+        ids.append(out.stdout.split(":")[0].strip())
+    assert len(set(ids)) == 2, ids
+    out = ditherlab("status", "edited-law")
+    assert out.returncode == 0 and ids[1] in out.stdout and ids[0] not in out.stdout, \
+        (out.stdout, out.stderr)
+    laws.write_text(laws.read_text() + "\n# edited once more\n")   # neither is current now
+    out = ditherlab("status", "edited-law")
+    assert out.returncode == 2 and "names 2 sweeps" in out.stderr, out.stderr
