@@ -16,7 +16,7 @@ import json
 import os
 from pathlib import Path
 
-from .errors import AmbiguousSweepError, SpecError, UserError
+from .errors import AmbiguousSweepError, UserError
 
 STALE = "stale: engine changed"
 
@@ -90,13 +90,20 @@ def is_stale(row: dict, ds=None) -> bool:
     made = engine_of(row, ds)
     if made:
         return made != results_fingerprint()
+    return not _hashes_to_its_id(row)
+
+
+def _hashes_to_its_id(row: dict) -> bool:
+    """The row's spec, loaded now, still hashes to its sweep id (which covers the engine
+    and a brought model's source: sweeps.spec.models.Spec.sweep_id); False also when it
+    cannot be loaded (a brought model moved, broken or not importable here)."""
     from .spec.load import load_spec
 
     try:
-        spec = load_spec(json.loads(row["spec_json"]), max_points=max(row["n_points"], 1))
-    except (SpecError, ValueError, TypeError):
-        return True
-    return spec.sweep_id != row["sweep_id"]
+        spec = load_spec(json.loads(row["spec_json"]), max_points=max(int(row["n_points"]), 1))
+    except Exception:  # noqa: BLE001 -- a user's module may raise anything on import
+        return False
+    return spec.sweep_id == row["sweep_id"]
 
 
 def model_changed(row: dict) -> bool:
@@ -114,13 +121,7 @@ def model_changed(row: dict) -> bool:
         return False
     if not any(is_import_path(str(raw.get(k, ""))) for k in ("friction", "system")):
         return False
-    from .spec.load import load_spec
-
-    try:
-        spec = load_spec(raw, max_points=max(int(row["n_points"]), 1))
-    except Exception:  # noqa: BLE001 -- the user's module: moved, broken, not importable
-        return True
-    return spec.sweep_id != row["sweep_id"]
+    return not _hashes_to_its_id(row)
 
 
 def stale_note(row: dict, ds=None, root: Path | None = None) -> str | None:

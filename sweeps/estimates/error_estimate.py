@@ -24,7 +24,6 @@ where the level is converged it is close to the true error; where it is not, it 
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -50,55 +49,37 @@ def finer_numerics(plan: Plan) -> Numerics:
     sweep's device: a dozen points, each on one GPU thread 10-24x slower than on a core
     (docs/GPU.md, an H200), would be a GPU sweep's tail.
 
-    A run 100x more accurate measures the level's error to about 1 %, 10x to about 10 %;
-    the next level whatever it was was at times no check at all, at others a needless
-    price: a static law's draft runs at its
-    standard's tolerances (sweeps.spec.accuracy.STATIC_RTOL_PER_BAND), so its estimate
-    compared two identical runs and always said 0; an elasto-plastic sweep's reference is
-    DP5 at rtol 1e-12, 10^4 x standard's, and its 12 re-runs took 4.5 % of Fig. 14's
-    workers' time where rtol 1e-10 took 2.1x less and changed the estimate by at most 1.2 %
-    of itself (docs/ACCURACY.md 5.5)."""
+    A run 100x more accurate measures the level's error to about 1 %, 10x to about 10 %.
+    The next level, whatever it was, was at times no check at all, at others a needless
+    price: a static law's draft runs at its standard's tolerances
+    (sweeps.spec.accuracy.STATIC_RTOL_PER_BAND), so its estimate compared two identical
+    runs and always said 0; an elasto-plastic sweep's reference is DP5 at rtol 1e-12, 10^4 x
+    standard's, and its 12 re-runs took 4.5 % of Fig. 14's workers' time where rtol 1e-10
+    took 2.1x less and changed the estimate by at most 1.2 % of itself (docs/ACCURACY.md
+    5.5)."""
     s, integrator = plan.numerics.settings, plan.numerics.integrator
-    finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100, device="cpu",
-                    steps_per_period=s.steps_per_period * 4, h=s.h / 4)
     level = FINER.get(plan.numerics.label)
     if level is not None:
         nxt = numerics(plan.spec, float(plan.params[P.SIGMA0]), level)
-        nxt = replace(nxt, settings=replace(nxt.settings, device="cpu"))
-        if nxt.integrator != integrator or _same(_read(integrator, nxt.settings),
-                                                 _read(integrator, finer)) or \
-                _tighter_10_to_100(integrator, s, nxt.settings):
-            return nxt
+        if nxt.integrator != integrator or _tighter_10_to_100(integrator, s, nxt.settings):
+            return replace(nxt, settings=replace(nxt.settings, device="cpu"))
+    finer = replace(s, rtol=s.rtol / 100, atol=s.atol / 100, device="cpu",
+                    steps_per_period=s.steps_per_period * 4, h=s.h / 4)
     return Numerics(integrator, finer, f"{plan.numerics.label}/100")
 
 
 def _tighter_10_to_100(integrator: str, own, nxt) -> bool:
-    """The next level's adaptive tolerances are 10x to 100x tighter than the level's: good
-    enough to measure its error (to about 10 %) and cheaper than tolerances / 100. The
-    stiff method's standard (rtol 1e-9) against its reference (1e-10): 12 stiff points
-    took 6.1 s against 13.3 s at rtol 1e-11, and the estimates agreed within 6 %."""
+    """The next level's adaptive tolerances are 10x to 100x tighter than the level's (100x:
+    the same run as tolerances / 100, under the next level's name): good enough to measure
+    its error (to about 10 %) and cheaper than tolerances / 100. The stiff method's
+    standard (rtol 1e-9) against its reference (1e-10): 12 stiff points took 6.1 s against
+    13.3 s at rtol 1e-11, and the estimates agreed within 6 %."""
     from engine.integrators import METHODS
 
     if not METHODS[integrator].ADAPTIVE or not nxt.rtol > 0:
         return False
-    ratio = own.rtol / nxt.rtol
+    ratio = own.rtol / nxt.rtol   # (1e-8 / 1e-10 is not 100 in binary)
     return 10 * (1 - 1e-9) <= ratio <= 100 * (1 + 1e-9)
-
-
-def _same(a: tuple, b: tuple) -> bool:
-    """Settings read alike (1e-8 / 100 is not 1e-10 in binary)."""
-    return all(x == y if isinstance(x, str) else math.isclose(x, y, rel_tol=1e-12)
-               for x, y in zip(a, b))
-
-
-def _read(integrator: str, s) -> tuple:
-    """The settings ``integrator`` reads (engine.integrators: an adaptive method its
-    tolerances, a fixed-step one its step)."""
-    from engine.integrators import METHODS
-
-    if METHODS[integrator].ADAPTIVE:
-        return s.rtol, s.atol, s.atol_units, s.max_steps
-    return s.steps_per_period, s.h, s.max_steps
 
 
 def sample_index(shape: tuple[int, ...], coords: list[np.ndarray], seed: str,

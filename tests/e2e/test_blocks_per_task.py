@@ -7,6 +7,7 @@ tests/sweeps/planning/test_blocks_per_task.py."""
 from __future__ import annotations
 
 import threading
+from contextlib import contextmanager
 
 import numpy as np
 import pytest
@@ -60,26 +61,43 @@ class _Bar:
         pass
 
 
-@pytest.mark.timeout(300)
-def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
+@contextmanager
+def _threads(n: int):
+    """A matched client of an in-process dask cluster: one worker of ``n`` threads (the
+    monkeypatched compute_block runs there)."""
     from distributed import Client, LocalCluster
 
     from sweeps.workers.matching import matched
 
-    spec = parse_spec({"name": "group", "friction": "lugre", "dither": "sine-velocity",
-                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
-                       "grid": {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
-                                                           "num": 60}}})
-    plan = make_plan(spec)   # blocks of 4 points that say they took 0.25 s each: 1 s
+    with LocalCluster(n_workers=1, threads_per_worker=n, processes=False,
+                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
+        yield matched(client)
+
+
+def _plan(name: str, grid: dict):
+    """A plan of draft LuGre blocks of 4 points under sine dither over ``grid``."""
+    return make_plan(parse_spec({"name": name, "friction": "lugre", "dither": "sine-velocity",
+                                 "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
+                                 "grid": grid}))
+
+
+def _every(plan) -> list[int]:
+    return list(range(len(plan.blocks)))
+
+
+@pytest.mark.timeout(300)
+def test_the_dispatch_groups_blocks_beyond_the_ceiling(monkeypatch):
+    plan = _plan("group", {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
+                                                      "num": 60}})
+    # blocks of 4 points that say they took 0.25 s each: 1 s
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 threads: 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
     monkeypatch.setattr(dispatch, "tail_cap_s", lambda *a: float("inf"))   # (the tail's
     # smaller tasks: test_the_last_tasks_shrink)
     TASK_POINTS.clear()   # (this test's tasks alone, whatever ran before it)
     sink = _Sink()
-    with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
-                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
-        dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
+    with _threads(3) as client:
+        dispatch._dispatch(client, plan, _every(plan), sink, _Bar())
     assert sorted(sink.got) == list(range(len(plan.blocks)))
     points = plan.points
     for b, record in sink.got.items():   # each block has its own points' values
@@ -95,22 +113,14 @@ def test_the_last_tasks_shrink(monkeypatch):
     blocks once fewer blocks are left than tasks fit in flight (3 threads x DEPTH 2),
     so that no thread runs a last group while the others idle. (30 blocks of one expected
     cost c: with k left the cap is k c / 6, below 2 c once k < 12.)"""
-    from distributed import Client, LocalCluster
-
-    from sweeps.workers.matching import matched
-
-    spec = parse_spec({"name": "tail", "friction": "lugre", "dither": "sine-velocity",
-                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
-                       "grid": {"W": [0.5], "omega": [100.0],   # blocks of equal cost
-                                "v_ref": {"start": 0.1, "stop": 0.5, "num": 120}}})
-    plan = make_plan(spec)
+    plan = _plan("tail", {"W": [0.5], "omega": [100.0],   # blocks of equal cost
+                          "v_ref": {"start": 0.1, "stop": 0.5, "num": 120}})
     monkeypatch.setattr(planning, "SUBMITTER_TASKS_PER_S", 1.0)   # 3 blocks a task
     monkeypatch.setattr(task, "compute_block", _instant)
     TASK_POINTS.clear()
     sink = _Sink()
-    with LocalCluster(n_workers=1, threads_per_worker=3, processes=False,
-                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
-        dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink, _Bar())
+    with _threads(3) as client:
+        dispatch._dispatch(client, plan, _every(plan), sink, _Bar())
     assert sorted(sink.got) == list(range(len(plan.blocks)))
     assert sum(TASK_POINTS) == plan.n_points and max(TASK_POINTS) == 3 * 4, TASK_POINTS
     assert TASK_POINTS[-6:] == [4] * 6, TASK_POINTS   # the last tasks: a block each
@@ -151,16 +161,10 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
     the cube published, both jobs cancelled 4 s after they started). Here the re-runs
     wait until the dispatch has looked at the workers with every block back, so that they
     are certainly still running then."""
-    from distributed import Client, LocalCluster
-
     from sweeps.estimates.error_reruns import SampleRuns
-    from sweeps.workers.matching import matched
 
-    spec = parse_spec({"name": "jobs", "friction": "lugre", "dither": "sine-velocity",
-                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
-                       "grid": {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
-                                                           "num": 20}}})
-    plan = make_plan(spec)
+    plan = _plan("jobs", {"W": [0.0, 1.0], "omega": {"start": 10.0, "stop": 1000.0,
+                                                     "num": 20}})
     sample = SampleRuns(plan)
     sink = _Sink()
     jobs = _Jobs(sample, sink, len(plan.blocks))
@@ -169,12 +173,10 @@ def test_a_batch_cluster_keeps_a_job_for_each_rerun_still_to_come(monkeypatch):
     monkeypatch.setattr(dispatch, "REFRESH_S", -1.0)   # a look at the workers every turn,
     # whatever the clock's resolution
     # more threads than re-runs: the blocked re-runs leave threads to the blocks
-    with LocalCluster(n_workers=1, threads_per_worker=len(sample.order) + 4,
-                      processes=False, **LOOPBACK_CLUSTER) as cluster, \
-            Client(cluster) as client:
+    with _threads(len(sample.order) + 4) as client:
         try:
-            dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink,
-                               _Bar(), sample=sample, compute=jobs)
+            dispatch._dispatch(client, plan, _every(plan), sink, _Bar(), sample=sample,
+                               compute=jobs)
         finally:
             RELEASED.set()
         finished_at_return = sample.finished()
@@ -216,23 +218,14 @@ def test_a_stop_collects_one_task_per_thread_not_those_waiting(monkeypatch):
     waiting behind a running task are cancelled, so a stop (a cancel, serve's shutdown, a
     lost lease) waits for one task per thread, as before tasks waited at the workers. The
     running ones finish and are journaled; the rest stay to compute."""
-    from distributed import Client, LocalCluster
-
-    from sweeps.workers.matching import matched
-
-    spec = parse_spec({"name": "stop", "friction": "lugre", "dither": "sine-velocity",
-                       "outputs": ["F_mean"], "accuracy": "draft", "block_size": 4,
-                       "grid": {"W": [0.5], "omega": [100.0],
-                                "v_ref": {"start": 0.1, "stop": 0.5, "num": 40}}})
-    plan = make_plan(spec)
+    plan = _plan("stop", {"W": [0.5], "omega": [100.0],
+                          "v_ref": {"start": 0.1, "stop": 0.5, "num": 40}})
     HELD.clear()
     monkeypatch.setattr(task, "compute_block", _held)
     sink = _StoppingSink()
-    with LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
-                      **LOOPBACK_CLUSTER) as cluster, Client(cluster) as client:
+    with _threads(2) as client:
         try:
-            dispatch._dispatch(matched(client), plan, list(range(len(plan.blocks))), sink,
-                               _Bar())
+            dispatch._dispatch(client, plan, _every(plan), sink, _Bar())
         finally:
             HELD.set()
     assert len(sink.got) == 2, sorted(sink.got)   # the two running; two more were waiting
