@@ -24,8 +24,8 @@ from ..planning.plan import Plan, blocks_per_task, work_s
 from ..estimates.error_reruns import complete, estimate_into, needs_estimate
 from . import interrupt
 from .sink import BlockSink
-from .order import (DEPTH, cancel_waiting, longest_first, outstanding, rerun_first,
-                    rerun_group_s, reruns_left, tail_cap_s)
+from .order import (DEPTH, longest_first, outstanding, rerun_first, rerun_group_s,
+                    reruns_left, tail_cap_s)
 
 REFRESH_S = 2.0    # how often the dispatch looks at the workers again
 TICK_S = 0.02      # how often the threads' dispatch looks for finished blocks (x 5)
@@ -99,8 +99,8 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
               filler=None, sample=None, compute=None) -> None:
     """Keep DEPTH tasks per matching worker thread in flight (one per thread plus one for a
     brought model), the next submitted as one finishes; once ``sink.should_stop()``,
-    submit no more, cancel the tasks waiting behind running ones and collect those running
-    (a stop loses no finished work and waits for at most one task per thread). A task
+    submit no more and collect those in flight (a stop loses no finished work, computes no
+    block twice, and waits for at most DEPTH tasks per thread). A task
     computes ``blocks_per_task`` blocks (by the mean block's measured seconds: one until
     blocks are back), fewer towards the end (:func:`tail_cap_s`), journaled as blocks.
     Blocks go longest expected first, and the error sample's re-runs (``sample``) among
@@ -166,7 +166,6 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
                 len(inflight) + filler.running() < threads and filler.submit_next(client):
             done.update([filler.last_task])
 
-    stopped = False
     while True:
         interrupt.check()   # a Ctrl-C that a dask callback swallowed (sweeps.run.interrupt)
         if time.monotonic() - looked > REFRESH_S:   # workers may join or leave
@@ -191,9 +190,6 @@ def _dispatch(client, plan: Plan, todo: list[int], sink: BlockSink, bar,
         stopping = sink.should_stop()
         if not stopping:
             fill()
-        elif not stopped:   # the tasks waiting behind a running one are not started
-            stopped = True
-            cancel_waiting(client, inflight, sum(good.values()))
         if not inflight and (stopping or not queue and not reruns_left(sample)):
             show_reruns(bar, sample)   # (the estimate counts on from what is shown)
             break

@@ -12,7 +12,9 @@ DEPTH = 2   # tasks in flight per worker thread: one running and one waiting at 
             # task here, most of a worker's idle time in scripts/bench_sweep.py). Not for a
             # brought model (one more in flight in all): dask blames a worker's death on
             # every task it held, and a block waiting behind one that crashes its process
-            # would count deaths it did not cause (sweeps.workers.deaths)
+            # would count deaths it did not cause (sweeps.workers.deaths). A stop waits
+            # for both: cancelling the waiting one lost its block when it had just started
+            # (computed again on resume; tests/e2e/test_service.py's cancel test saw it)
 
 
 def reruns_left(sample) -> bool:
@@ -72,16 +74,3 @@ def rerun_group_s(cost: list) -> float:
     back. The 12 re-runs of 1,000 draft LuGre points (10 ms each), a task each, were the
     last 0.2 s of a 3.3 s run on 2 workers here."""
     return min_task_s() * cost[2] / cost[0] if cost[0] > 0 else 0.0
-
-
-def cancel_waiting(client, inflight: dict, threads: int) -> None:
-    """On a stop: cancel the tasks submitted after the oldest ``threads`` not finished
-    (those waiting at a worker behind a running one, DEPTH), so that a stop waits for at
-    most one task per thread, as it did before tasks waited at the workers. Their blocks
-    stay to compute (a resume computes them); a finished task is never cancelled."""
-    running = [f for f in inflight if f.status == "pending"]
-    waiting = running[max(threads, 1):]
-    if waiting:
-        client.cancel(waiting)
-        for f in waiting:
-            inflight.pop(f)

@@ -199,7 +199,7 @@ def _held(scene, points, p, settings, index, sizes=None, kind="block"):
 class _StoppingSink(_Sink):
     """Asked ``should_stop`` once per turn of the dispatch: no at the first (the first
     tasks are submitted), yes from the second on (a cancel); at the third, the stop has
-    been handled, and the running tasks are let go."""
+    been seen, and the running tasks are let go."""
 
     def __init__(self):
         super().__init__()
@@ -213,11 +213,12 @@ class _StoppingSink(_Sink):
 
 
 @pytest.mark.timeout(300)
-def test_a_stop_collects_one_task_per_thread_not_those_waiting(monkeypatch):
-    """Two tasks per thread are in flight (sweeps.run.order.DEPTH); on a stop the ones
-    waiting behind a running task are cancelled, so a stop (a cancel, serve's shutdown, a
-    lost lease) waits for one task per thread, as before tasks waited at the workers. The
-    running ones finish and are journaled; the rest stay to compute."""
+def test_a_stop_collects_every_task_in_flight_the_waiting_ones_too(monkeypatch):
+    """Two tasks per thread are in flight (sweeps.run.order.DEPTH); on a stop (a cancel,
+    serve's shutdown, a lost lease) the dispatch submits no more and collects them all,
+    the ones waiting behind a running task too: none is cancelled, so a block that had
+    just started is not lost and computed again on resume (a version that cancelled the
+    waiting ones failed tests/e2e/test_service.py's cancel test once in four CI runs)."""
     plan = _plan("stop", {"W": [0.5], "omega": [100.0],
                           "v_ref": {"start": 0.1, "stop": 0.5, "num": 40}})
     HELD.clear()
@@ -228,4 +229,4 @@ def test_a_stop_collects_one_task_per_thread_not_those_waiting(monkeypatch):
             dispatch._dispatch(client, plan, _every(plan), sink, _Bar())
         finally:
             HELD.set()
-    assert len(sink.got) == 2, sorted(sink.got)   # the two running; two more were waiting
+    assert sorted(sink.got) == [0, 1, 2, 3]   # 2 threads x DEPTH 2, submitted before the stop

@@ -1,6 +1,6 @@
-"""The order and size of a run's tasks (sweeps.run.order): the tail's cap, when the
-dispatch waits for the error sample's re-runs, and which tasks a stop cancels. The dispatch
-with these on a dask cluster: tests/e2e/test_blocks_per_task.py."""
+"""The order and size of a run's tasks (sweeps.run.order): the tail's cap, and when the
+dispatch waits for the error sample's re-runs. The dispatch with these on a dask cluster:
+tests/e2e/test_blocks_per_task.py."""
 from __future__ import annotations
 
 from sweeps.run import order
@@ -32,25 +32,3 @@ def test_the_dispatch_waits_for_reruns_running_or_to_come_unless_one_was_given_u
     assert order.reruns_left(_Sample(next_cost=0.1))
     assert not order.reruns_left(_Sample(running=2, given_up="a re-run was given up: ..."))
 
-
-class _Future:
-    def __init__(self, status):
-        self.status = status
-
-
-class _Client:
-    def __init__(self):
-        self.cancelled = []
-
-    def cancel(self, futures):
-        self.cancelled += futures
-
-
-def test_a_stop_cancels_the_tasks_waiting_behind_the_oldest_one_per_thread():
-    done, a, b, c, d = (_Future("finished"), _Future("pending"), _Future("pending"),
-                        _Future("pending"), _Future("pending"))
-    inflight = {done: 0, a: 1, b: 2, c: 3, d: 4}   # in the order submitted
-    client = _Client()
-    order.cancel_waiting(client, inflight, threads=2)
-    assert client.cancelled == [c, d]              # a finished one is never cancelled
-    assert list(inflight) == [done, a, b]
