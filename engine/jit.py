@@ -26,8 +26,7 @@ functions it calls, so an edit elsewhere in the engine could replay stale machin
 The cache therefore lives in a folder named by a hash of every engine source file (the
 engine fingerprint, engine.provenance, also recorded in every cube):
 ``$DITHERLAB_CACHE_DIR`` (default ``~/.cache/ditherlab``) ``/numba-<fingerprint>``. Any edit of
-the engine starts a fresh cache; the folders no engine has used for 30 days are removed
-(engine.cache_folders).
+the engine starts a fresh cache; folders unused for 30 days are removed (engine.cache_folders).
 """
 from __future__ import annotations
 
@@ -42,7 +41,7 @@ from pathlib import Path
 import numba
 import numpy
 
-from . import cache_folders, kernel_cache
+from . import cache_folders, deep_stack, kernel_cache
 from .provenance import cache_root, fingerprint
 
 
@@ -116,6 +115,7 @@ def _helpers_per_fastmath() -> None:
 
 
 _helpers_per_fastmath()
+deep_stack.install()   # no data-stack chunk mapped per call in a compile (engine.deep_stack)
 
 
 _REGISTRIES_LOADED = False
