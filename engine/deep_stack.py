@@ -1,41 +1,35 @@
-"""numba compiles on a deep Python data stack: half of a first compile was ``mmap``/``munmap``.
+"""numba compiles on a deep Python data stack: up to half of a first compile was ``mmap``.
 
-Since 3.11, CPython keeps a thread's Python frames in 16 KiB chunks of a data stack. A call
+Since 3.11, CPython keeps a thread's Python frames in 16 KiB chunks of a data stack: a call
 that does not fit in the current chunk maps a new one, and the return that empties it unmaps
-it at once (``push_chunk`` / ``_PyThreadState_PopFrame``; CPython issue gh-142183, mended in
-2026 for 3.13 and 3.14 by keeping one spare chunk per thread, not for 3.11 or 3.12). numba's
-compiler is deep,
-recursive Python (type inference, ``deepcopy`` of its IR); wherever its hottest calls sit on
-a chunk boundary, every such call costs a map and an unmap. Where the boundary falls depends
-on the frames below the compile, so the cost differed with the thread that compiled:
-
-=========================================  =================  ================
-a scene's first compile (AMD EPYC, 2 cores)  the main thread    a worker thread
-=========================================  =================  ================
-the cheap sweep's scene (mmap calls)        6.0-8.0 s (60 k)   8.2-9.1 s (309 k)
-Fig. 14's scene                             --                 18.8-20.6 s
-both, on a deep stack (this module)         5.7 s              6.2 s; 9.4-9.7 s
-=========================================  =================  ================
-
-(scratch measurements, 2026-11-30: the system CPU time went from 0.6-3.3 s to 0.2 s.)
+it at once (``push_chunk`` and ``_PyThreadState_PopFrame``; CPython issue gh-142183, mended
+in 2026 for 3.13 and 3.14 by one spare chunk per thread, not for 3.11 or 3.12). numba's
+compiler is deep, recursive Python (type inference, ``deepcopy`` of its IR for inlining);
+wherever its busiest calls sit on a chunk boundary, each of them maps and unmaps a chunk.
+Where the boundaries fall depends on the frames below the compile, so the cost depended on
+the thread that compiled. The cheap sweep's scene (scripts/bench_efficiency.py) compiled in
+6.0-8.0 s on a main thread and in 8.2-9.1 s on a worker thread (309,000 ``mmap`` calls, 2.2
+to 3.3 s of system time), Fig. 14's in 18.8-20.6 s on a thread; on a deep stack, 5.3-5.5 s
+and 9.4-9.7 s, with 0.2 s of system time (AMD EPYC, 2 cores; docs/PERFORMANCE.md).
 
 :func:`install` wraps numba's compile of a CPU function, ``Dispatcher.compile`` (called by
 engine.jit.compile_once, and by a dispatcher called from Python with argument types it has
-no machine code for), so that the compile runs in a frame of :func:`_on_a_deep_stack`, whose
-code object claims an evaluation stack of ``RESERVE`` bytes it never uses. CPython gives
-such a frame a chunk of its own, twice its size (``push_chunk`` rounds up to a power of
-two), and every frame the compile pushes lives in the other half: no chunk is mapped or
-unmapped until the compile returns. The pages never touched are never committed. A compile nested in a compile (a callee typed from its
-caller) runs on the same stack.
+no machine code for), so that the compile runs in a frame of :func:`_on_a_deep_stack`,
+whose code object claims an evaluation stack of ``RESERVE`` bytes it never uses. CPython
+gives that frame a new chunk twice its size (``push_chunk`` rounds up to a power of two),
+and every frame the compile pushes lives in the other half: no chunk is mapped or unmapped
+until the compile returns (the deepest compile measured, Fig. 14's scene, stayed inside).
+Pages never touched are never committed. A compile nested in a compile (a callee typed
+from its caller) runs on the same stack. The GPU's compiler (numba.cuda) is not wrapped.
 
-numba internals (pinned to 0.68 in pyproject.toml); tests/engine/test_deep_stack.py says so
-if they move.
+numba internals (pinned to 0.68 in pyproject.toml): tests/engine/test_deep_stack.py fails
+if its compiles stop passing through ``Dispatcher.compile``.
 """
 from __future__ import annotations
 
 import threading
 
-RESERVE = 1 << 20   # bytes of the data stack kept for a compile (measured deepest: see test)
+RESERVE = 1 << 20   # bytes of the data stack kept for a compile
 
 _IN_COMPILE = threading.local()
 

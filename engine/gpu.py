@@ -33,6 +33,7 @@ from functools import cache
 import numpy as np
 
 from . import status as S
+from .deep_stack import on_a_deep_stack
 from .gpu_source import kernel_namespace, kernel_source, simulated
 from .kernels import method_module, point_kernel
 
@@ -134,8 +135,8 @@ def _launch(kernel, scene, grid: int, stream, args) -> None:
     """``kernel[grid, THREADS_PER_BLOCK, stream](*args)``; a first launch that fails to
     compile is one ValueError naming the rule kernel code breaks."""
     compiled = bool(getattr(kernel, "overloads", True))   # (the simulator compiles nothing)
-    try:
-        kernel[grid, THREADS_PER_BLOCK, stream](*args)
+    try:   # (a first launch compiles: on a deep data stack, as the CPU's, engine.deep_stack)
+        on_a_deep_stack(kernel[grid, THREADS_PER_BLOCK, stream], *args)
     except Exception as exc:   # noqa: BLE001 -- the first launch compiles: numba.cuda's
         if compiled:           # lowering raises bare KeyErrors (a numpy ufunc) as well as
             raise              # NumbaErrors; a launch of a compiled kernel fails as it is
