@@ -8,9 +8,9 @@ compiler is deep, recursive Python (type inference, ``deepcopy`` of its IR for i
 wherever its busiest calls sit on a chunk boundary, each of them maps and unmaps a chunk.
 Where the boundaries fall depends on the frames below the compile, so the cost depended on
 the thread that compiled. The cheap sweep's scene (scripts/bench_efficiency.py) compiled in
-6.0-8.0 s on a main thread and in 8.2-9.1 s on a worker thread (309,000 ``mmap`` calls, 2.2
-to 3.3 s of system time), Fig. 14's in 18.8-20.6 s on a thread; on a deep stack, 5.3-5.5 s
-and 9.4-9.7 s, with 0.2 s of system time (AMD EPYC, 2 cores; docs/PERFORMANCE.md).
+6.0-8.0 s on a main thread and in 8.1-9.1 s on a worker thread (309,000 ``mmap`` calls, 2.2
+to 3.3 s of system time), Fig. 14's in 18.8-20.6 s on a thread; on a deep stack, 5.5-5.8 s
+and 9.4 s, with 0.2 s of system time (AMD EPYC, 2 cores; docs/PERFORMANCE.md).
 
 :func:`install` wraps numba's compile of a CPU function, ``Dispatcher.compile`` (called by
 engine.jit.compile_once, and by a dispatcher called from Python with argument types it has
