@@ -19,7 +19,8 @@ What is recorded (every float64 array, compared bit for bit; NaN equals NaN):
   API (``sweeps.run_sweep``), all data variables except the wall-clock ``cost_s``;
 - **engine probes**: one trajectory per compile-time scene variant that the simulate path can
   take (each friction law x each dither on the slider, each integrator, the contact system
-  with each law, each effect flag switched off), with its steps recorded (t, y), its outputs,
+  with each law, each effect flag switched off; Dahl and GMS on the slider and the contact
+  system, the servo with LuGre and GMS), with its steps recorded (t, y), its outputs,
   final state and step counters;
 - **the hard cases** of ``tests/hard`` run in CI (stiff contacts, tiny velocities, fast
   dither), at the tolerances of their tests, recorded step by step.
@@ -47,6 +48,11 @@ PROBE = {"v_ref": 0.4, "W": 0.4, "omega": 300.0, "t_end": 3.0, "t_transient": 1.
 CONTACT_PROBE = {"t_end": 0.05, "t_transient": 0.01}
 LAWS = ("coulomb", "stribeck", "lugre", "elastoplastic")
 DITHERS = ("none", "square-velocity", "sine-velocity", "sine-force")
+# the models' probes: Dahl and GMS (own parameters: docs/examples/servo-gms.toml's GMS), on
+# each system; the servo with its own outputs
+GMS = {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5], "C": 20.0}
+SERVO = {"kp": 1.0, "ki": 0.5, "kd": 1.0, "x_ref": 1.0}
+SERVO_OUTPUTS = ("hunt_amplitude", "hunt_period", "steady_error", "stick_fraction")
 
 
 def _scenes():
@@ -75,18 +81,48 @@ def _scenes():
                    dict(system="contact", friction=law, dither="sine-velocity", integrator=method,
                         outputs=("F_mean", "v_mean")),
                    CONTACT_PROBE, "contact")
+    yield from _model_scenes(outputs)
+
+
+def _model_scenes(outputs):
+    """The probes of the laws and the system that came with the models issue: their
+    parameters packed by engine.registry (``defaults`` names law, system and own values)."""
+    for law, own in (("dahl", {}), ("gms", GMS)):
+        for dither in DITHERS:
+            yield (f"slider/{law}/{dither}/dopri5", dict(friction=law, dither=dither,
+                   outputs=outputs), PROBE, (law, "slider", own))
+        yield (f"slider/{law}/square-velocity/rodas4", dict(friction=law, integrator="rodas4",
+               outputs=outputs), PROBE, (law, "slider", own))
+        yield (f"contact/{law}/sine-velocity/dopri5",
+               dict(system="contact", friction=law, dither="sine-velocity",
+                    outputs=("F_mean", "v_mean")), CONTACT_PROBE, (law, "contact", own))
+    for law, own in (("lugre", {}), ("gms", GMS)):
+        for dither in ("none", "sine-velocity"):
+            yield (f"servo/{law}/{dither}/dopri5",
+                   dict(system="servo", friction=law, dither=dither, outputs=SERVO_OUTPUTS),
+                   {**PROBE, "t_end": 30.0, "t_transient": 10.0}, (law, "servo", {**own, **SERVO}))
+
+
+def _probe(kw, over, defaults):
+    """The Scene and parameter vector of one probe."""
+    from engine import params as P
+    from engine import registry
+    from engine.scene import Scene
+
+    if isinstance(defaults, tuple):   # a model's probe: (law, system, own values)
+        law, system, own = defaults
+        p = registry.pack(law, system, own, **over)
+        return Scene.from_params(p, sizes=registry.sizes_of(law, system, own), **kw), p
+    return Scene(**kw), P.pack(P.CONTACT_DEFAULTS if defaults == "contact" else None, **over)
 
 
 def engine_probes() -> dict:
-    from engine import params as P
     from engine.api import simulate
-    from engine.scene import Scene
 
     found = {}
     for key, kw, over, defaults in _scenes():
-        base = P.CONTACT_DEFAULTS if defaults == "contact" else None
         try:
-            sim = simulate(Scene(**kw), P.pack(base, **over), record=True, max_records=200_000)
+            sim = simulate(*_probe(kw, over, defaults), record=True, max_records=200_000)
         except ValueError as err:   # a combination the engine refuses: the refusal is recorded
             found[f"probe/{key}/refused"] = np.frombuffer(str(err).encode(), dtype=np.uint8)
             continue

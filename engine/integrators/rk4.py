@@ -21,6 +21,7 @@ from .problem import (
     CTR_REJECTED,
     CTR_STEPS,
     FRESH_START,
+    FRESH_SWITCH,
     Stepper,
     make_sampler,
     record_step,
@@ -98,6 +99,8 @@ def make_stepper(problem) -> Stepper:
         k1, k2, k3, k4, yt, y0, ym, ytmp = R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7]
         if sampling and fresh == FRESH_START:
             state[0] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
+        if modal and fresh == FRESH_SWITCH:   # the dither's sign jumped u: modes follow now
+            update_modes(t0, y, p, sq, -1)
         m = max(1, math.ceil((t1 - t0) / cfg.h * (1.0 - 1e-12)))
         h = (t1 - t0) / m
         for j in range(m):
