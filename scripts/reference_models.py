@@ -1,7 +1,9 @@
 """Independent references for the Dahl and GMS laws (issue 35), written without the engine.
 
 Method: scipy's ``solve_ivp`` (DOP853, rtol = atol = 1e-10, dense output) on the slider of
-the paper (``de = v_ref - v``, ``dv = e - F``) with sine-velocity dither
+the paper (``de = v_ref - v``, ``dv = e - F``) or on the servo (engine.systems.servo: ``dx =
+v``, ``m dv = kp e - kd v + ki xi - F``, ``dxi = e`` with ``e = x_ref + v_ref t - x``), with
+sine-velocity dither
 ``u = v + W sin(omega t)`` or square-velocity dither ``u = v + W sq(omega t)`` (``sq`` = +1
 on ``(k pi / omega, (k + 1) pi / omega)`` for even k, -1 for odd: DESIGN.md), the law's
 equations written out again here in numpy. Every square-wave switch is a stop: u jumps
@@ -12,8 +14,9 @@ switch is an event of ``solve_ivp`` (terminal): Dahl's ``u = 0`` and ``r = 0``; 
 reversal ``u = 0`` and, per stuck element, ``alpha_i s(u) - d F_i = 0`` with ``d`` the
 direction of u over the segment. At each event the integration stops, the modes change by
 which event fired (a reversal sticks every element, an element's event makes it slip in the
-direction of u: the law's definition, not the engine's state-based ``update_modes``) and
-it restarts, so no step crosses a corner. The mean velocity comes from the spring stretch,
+direction of u: the law's definition, not the engine's state-based ``update_modes``; other
+stuck elements at their shares at that instant too slip with it, ``SAME_ROOT``) and it
+restarts, so no step crosses a corner. The mean velocity comes from the spring stretch,
 ``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with ``x = v_ref t - e``, and the mean friction
 from a quadrature state ``dQ = F``.
 
@@ -65,10 +68,18 @@ CASES = {
                      (0.3, 20.0, 0.1), (20.0, 5.0), "square-velocity"),
     "dahl-a1.5-square": ("dahl", {"dahl_alpha": 1.5}, (0.3, 20.0, 0.2), (20.0, 5.0),
                          "square-velocity"),
+    # the servo (PID on a ramp) under the same dither: elements that reach their shares a
+    # hair apart (their deflections move together while stuck); the engine switched the
+    # second one a step late when its root fell too close after the first's landing (F_mean
+    # 1 % off at rtol 1e-13, 5 % at 1e-10) until 2026-11-30
+    "gms-3-servo-square": ("gms", {"k": [40.0, 100.0, 250.0], "alpha": [0.2, 0.3, 0.5],
+                                   "C": 20.0, "kp": 1.0, "ki": 0.5, "kd": 1.0, "x_ref": 1.0},
+                           (0.3, 100.0, 0.1), (30.0, 10.0), "square-velocity", "servo"),
 }
 
 
 MAX_STEP_PER_PERIOD = 400
+SAME_ROOT = 1e-9   # relative: another element's share reached at an event's instant too
 
 
 def stribeck(u, q):
@@ -79,7 +90,7 @@ def sgn(x):
     return 1.0 if x > 0 else (-1.0 if x < 0 else 0.0)
 
 
-def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
+def run(law, own, point, window, dither="sine-velocity", system="slider", rtol=1e-10,
         per_period=MAX_STEP_PER_PERIOD):
     W, omega, v_ref = point
     square = dither == "square-velocity" and W != 0.0
@@ -94,8 +105,14 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
     a = np.array(own.get("alpha", [0.0]))
     modes = np.zeros(n)
 
+    servo = system == "servo"
+    Z = 3 if servo else 2   # the law's first state: after (x, v, xi) or (e, v)
+
     def u_of(t, y):
         return y[1] + (W * sq[0] if square else W * math.sin(omega * t))
+
+    def position(t, y):   # the body's: the servo's x, the slider's v_ref t - e
+        return y[0] if servo else v_ref * t - y[0]
 
     def force(u, z):
         if law == "dahl":
@@ -103,7 +120,7 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
         return float(np.dot(k, z)) + q["sigma2"] * u
 
     def rhs(t, y):
-        e, v, z = y[0], y[1], y[2:2 + n]
+        v, z = y[1], y[Z:Z + n]
         u = u_of(t, y)
         if law == "dahl":
             r = 1.0 - q["sigma0"] * z[0] * sgn(u) / q["fc"]
@@ -113,7 +130,11 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
             dz = [u if modes[i] == 0 else own["C"] / k[i] * (modes[i] * a[i] - k[i] * z[i] / s)
                   for i in range(n)]
         F = force(u, z)
-        return [v_ref - v, e - F, *dz, F]
+        if servo:   # PID on the error to the ramp x_ref + v_ref t (engine.systems.servo)
+            err = own["x_ref"] + v_ref * t - y[0]
+            f = own["kp"] * err - own["kd"] * v + own["ki"] * y[2]
+            return [v, (f - F) / own.get("m", 1.0), err, *dz, F]
+        return [v_ref - v, y[0] - F, *dz, F]
 
     def events():
         out = []
@@ -124,7 +145,7 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
         if law == "dahl":
             def r_zero(t, y):
                 u = u_of(t, y)
-                return 1.0 - q["sigma0"] * y[2] * sgn(u) / q["fc"]
+                return 1.0 - q["sigma0"] * y[Z] * sgn(u) / q["fc"]
             out.append(r_zero)
         else:
             for i in range(n):
@@ -133,7 +154,7 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
                         return 1.0
                     u = u_of(t, y)   # its force in the direction of u reaching its share,
                     #                  the direction held for the segment (see direction())
-                    return a[i] * stribeck(u, q) - held[0] * k[i] * y[2 + i]
+                    return a[i] * stribeck(u, q) - held[0] * k[i] * y[Z + i]
                 out.append(slip)
         for ev in out:
             ev.terminal = True
@@ -163,6 +184,13 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
             modes[:] = 0.0
         elif which > 0:
             modes[which - 1] = held[0]   # (u read at the root could be a hair either side)
+            # stuck elements whose deflections moved together reach their shares together:
+            # solve_ivp stops for one of them, and the others are at their roots too (to
+            # round-off, SAME_ROOT of the share); they slip at the same instant
+            su = stribeck(u_of(t, y), q)
+            for i in range(n):
+                if modes[i] == 0 and held[0] * k[i] * y[Z + i] >= (1.0 - SAME_ROOT) * a[i] * su:
+                    modes[i] = held[0]
 
     def switch(t, y, j):
         """Square wave: the sign of half-period j from ``t = j pi / omega`` on, and the
@@ -176,10 +204,10 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
             modes[:] = 0.0
         d = sgn(u1)
         for i in range(n):
-            if modes[i] == 0 and d != 0 and d * k[i] * y[2 + i] >= a[i] * stribeck(u1, q):
+            if modes[i] == 0 and d != 0 and d * k[i] * y[Z + i] >= a[i] * stribeck(u1, q):
                 modes[i] = d
 
-    y = np.zeros(3 + n)
+    y = np.zeros(Z + n + 1)
     t = 0.0
     x_tr = q_tr = None
     stops = 0
@@ -206,22 +234,23 @@ def run(law, own, point, window, dither="sine-velocity", rtol=1e-10,
             update(t, y, fired[0] if fired else -1)
         stops += 1
         if x_tr is None and t >= t_tr:
-            x_tr, q_tr = v_ref * t - y[0], y[-1]
+            x_tr, q_tr = position(t, y), y[-1]
     span = t_end - t_tr
-    return {"v_mean": (v_ref * t_end - y[0] - x_tr) / span, "F_mean": (y[-1] - q_tr) / span,
+    return {"v_mean": (position(t_end, y) - x_tr) / span, "F_mean": (y[-1] - q_tr) / span,
             "e_end": float(y[0]), "v_end": float(y[1]), "stops": stops}
 
 
 def main():
     refs = {}
-    for name, (law, own, point, window, *dither) in CASES.items():
-        dither = dither[0] if dither else "sine-velocity"
-        r = run(law, own, point, window, dither)
-        r9 = run(law, own, point, window, dither, rtol=1e-9,
+    for name, (law, own, point, window, *rest) in CASES.items():
+        dither, system = ([*rest] + ["sine-velocity", "slider"][len(rest):])[:2]
+        r = run(law, own, point, window, dither, system)
+        r9 = run(law, own, point, window, dither, system, rtol=1e-9,
                  per_period=2 * MAX_STEP_PER_PERIOD)
         r["self_check"] = max(abs(r[o] - r9[o]) for o in ("v_mean", "F_mean"))
         refs[name] = {"law": law, "own": own, "point": point, "window": window,
                       **({"dither": dither} if dither != "sine-velocity" else {}),
+                      **({"system": system} if system != "slider" else {}),
                       "shared": SHARED, **r}
         print(f"{name:16s} v_mean {r['v_mean']:.12f}  F_mean {r['F_mean']:.12f}  "
               f"stops {r['stops']}  self_check {r['self_check']:.1e}")

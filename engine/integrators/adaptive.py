@@ -24,31 +24,24 @@ next step size; this driver does everything else, identically for every method.
   cannot reach (``u = v - W`` one ulp short) is passed. A landing shorter than
   ``LANDING_FLOOR * max(1, |t|)`` crosses the corner instead of landing on it
   (a corner hovering within round-off of ``t`` would otherwise repeat zero-length steps).
-  One policy for every method. (DP5 had no limit on short landings, RODAS no floor: against
-  an exact-sticking automaton of the Coulomb / Stribeck square-wave slider, DP5 with no limit
-  was 1.5e-1 off at rtol 1e-6 for 4.4e-3 with ``MAX_SHORT = 2``, chattering across the
-  Karnopp band in 3x the steps; from rtol 1e-8 on the two agree within 1e-7, and on the
-  LuGre hard cases (tests/hard) DP5's results are unchanged, RODAS's within 1e-8 of the
-  scipy references as before.)
+  One policy for every method (measured against an exact-sticking automaton: docs/ACCURACY.md).
 - Under a sine dither, a scene whose switches mark jumps or change modes (``period_cap``)
-  steps at most a quarter of the dither period (the stretch to a segment's end included):
-  within it the dither (``W sin(omega t)``, or the velocity a sine force drives) has at most
-  one extremum, so, while the rest of ``u`` moves little, a reversal of ``u`` and back
-  inside one step is the one dip the grazing probe looks for (a heuristic, not a bound).
-  Without the cap, a GMS slider whose elements all slipped took steps of 1.1 periods at
-  rtol 1e-5 (nothing in its states felt the dither), stepped over two reversals of u
-  unseen, and kept slipping the wrong way: ``F_mean`` 25 % off, unwarned
-  (tests/engine/test_models_reference.py, ``gms-3-reversals``; docs/ACCURACY.md 5.4).
+  steps at most a quarter of the dither period: within it the dither has at most one
+  extremum, so a reversal of ``u`` and back inside one step is the one dip the grazing probe
+  looks for (a heuristic, not a bound; without it a GMS slider stepped over reversals:
+  ``gms-3-reversals``, docs/ACCURACY.md 5.4).
 - Discrete modes (engine.contract: stick/slip of a GMS element): after each accepted step the
   law's ``update_modes`` gets the step-end state and the index of the switch the step landed
   on (-1: none; a landing may stop a hair short of its root, so the index, not the sign of
   the switching function there, says that it was reached); when a mode changed, the
   switching functions are evaluated anew and cached stages refreshed as after a dither
-  switch. At a square-wave switch (a segment that starts ``FRESH_SWITCH``) u jumps, perhaps
-  through zero: ``update_modes`` is called there first (``landed = -1``). Without it a GMS
-  element kept slipping the old way for the first step after each reversal by the wave, a
-  step whose length depends on the tolerance: F_mean 20 % off at rtol 1e-12, 95 % at
-  standard (``gms-3-square``, tests/engine/test_models_reference.py).
+  switch. Two more places where modes change (docs/ACCURACY.md 5.6): at a square-wave switch
+  (a segment that starts ``FRESH_SWITCH``: u jumps, perhaps through zero), ``update_modes``
+  is called first (``landed = -1``); and a switch whose root lies too close to a step's
+  start to land on (``th_min``; GMS elements that reach their shares a hair apart) was
+  reached at the start: its mode changes there and the step is retaken (``at_start``, once
+  per step). Without either, an element switched a tolerance-dependent step late
+  (``gms-3-square``, ``gms-3-servo-square`` in tests/engine/test_models_reference.py).
 - ``FAILED`` once accepted plus rejected steps reach ``cfg.max_steps`` or the step
   underflows (``h < 1e-14 max(1, |t|)``); ``NON_FINITE`` when it underflows because the
   error is not finite (the state blew up).
@@ -70,8 +63,8 @@ import numpy as np
 from .. import params as P
 from .. import status as S
 from ..jit import njit
-from .events import (make_dip_before, make_grazing_probe, make_locator, past_corner,
-                     sign_change)
+from .events import (make_dip_before, make_grazing_probe, make_locator, make_start_switch,
+                     past_corner, sign_change)
 from .problem import (
     CTR_EVALS,
     CTR_REJECTED,
@@ -93,6 +86,7 @@ UNDERFLOW = 1e-14     # a step below this times max(1, |t|) fails
 # scalar work state: step size, reject flag, next sampling index, short landings in a row
 W_H, W_REJ, W_K, W_SHORT = 0, 1, 2, 3
 W_METHOD = 4          # the method's own slots start here
+RETAKE = -2           # land(): a switch at the step's start changed the modes there
 
 
 @njit(inline="always", error_model="numpy", refcount=False)
@@ -143,6 +137,7 @@ def make_stepper(problem, method: Method) -> Stepper:
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     period_cap = problem.period_cap if n_ev > 0 else 0.0
     before = make_dip_before(events, n_ev, dense_eval, locate)
+    at_start = make_start_switch(events, n_ev, dense_eval, problem.update_modes)
     dips = graze and problem.update_modes is not None   # (the static laws: no need measured)
     first_sample, emit = make_sampler(problem, dense_eval)
     n_g, n_st = max(n_ev, 1), W_METHOD + method.n_state
@@ -157,10 +152,12 @@ def make_stepper(problem, method: Method) -> Stepper:
     # inlined (numba IR), as are the method's small parts: a call per step, with the work
     # tuple passed by value, cost DP5 15 % on the anchor scenes (1.23x -> 1.42x of C)
     @njit(inline="always", error_model="numpy", refcount=False)
-    def land(t, hh, err, y, p, sq, work, rtol, atol, ctr):
+    def land(t, hh, err, y, p, sq, work, rtol, atol, ctr, may_retake):
         """After an accepted trial of size hh: if an event changed sign inside it, retake
         the step so that it ends on the earliest root. Returns (hh, err, landed): the index
-        of the event the retaken step ends on, -1 when it was not retaken."""
+        of the event the retaken step ends on, -1 when it was not retaken, RETAKE when a
+        law's switch too close to the start to land on changed its modes at the start
+        (the caller then retakes the step from there)."""
         mw, Q, Y, G, st = work
         yn, ytmp = Y[0], Y[2]
         events(t + hh, yn, p, sq, G[1])
@@ -170,6 +167,8 @@ def make_stepper(problem, method: Method) -> Stepper:
         crossed = sign_change(G[0], G[1], n_ev)
         if crossed or graze:
             coeffs(y, yn, mw, Q)
+        if modal and crossed and may_retake and at_start(t, hh, y, p, sq, Q, G, ytmp, th_min):
+            return hh, err, RETAKE
         if crossed:
             th, idx = locate(t, hh, y, Q, p, sq, G[0], G[1], ytmp, G[2], 1.0, th_min)
             if dips and idx >= 0:   # another event's dip before that root
@@ -223,6 +222,7 @@ def make_stepper(problem, method: Method) -> Stepper:
                 and math.isfinite(p[P.OMEGA])):
             h_cap = period_cap * (2.0 * math.pi / p[P.OMEGA])
         t = t0
+        may_retake = True
         while t < t1:
             h = min(h, h_cap)
             ctr[CTR_EVALS] += prepare(t, y, h, t1, p, sq, mw, G, rtol, atol, st)
@@ -238,9 +238,10 @@ def make_stepper(problem, method: Method) -> Stepper:
                 hh_trial, err_trial = hh, err
                 landed = -1
                 if err <= 1.0 and n_ev:
-                    hh, err, landed = land(t, hh, err, y, p, sq, work, rtol, atol, ctr)
+                    hh, err, landed = land(t, hh, err, y, p, sq, work, rtol, atol, ctr,
+                                           may_retake)
                     last = last and landed < 0
-                if err <= 1.0:
+                if err <= 1.0 or landed == RETAKE:
                     break
                 ctr[CTR_REJECTED] += 1
                 h = on_reject(err, hh, st)
@@ -248,6 +249,12 @@ def make_stepper(problem, method: Method) -> Stepper:
                 if h < UNDERFLOW * max(1.0, abs(t)):
                     st[W_H] = h
                     return S.FAILED if math.isfinite(err) else S.NON_FINITE
+            if landed == RETAKE:   # the modes changed at t: the step again, with them
+                may_retake = False
+                ctr[CTR_REJECTED] += 1
+                ctr[CTR_EVALS] += restart(t, t1, y, p, sq, FRESH_SWITCH, mw, rtol, atol, st)
+                continue
+            may_retake = True
             h_next = on_accept(err_trial, hh_trial, err, hh, st)
             if needs_mid:
                 coeffs(y, yn, mw, Q)

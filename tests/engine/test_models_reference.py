@@ -5,7 +5,9 @@ The references are ``tests/engine/model_references.json``, made by
 ``scripts/reference_models.py`` (scipy DOP853 at rtol 1e-10, every switch an event; the
 method and its self-check are stated there), under sine-velocity dither, without, and under
 square-velocity dither (``gms-3-square``: until 2026-11-30 the engine kept a GMS element
-slipping for a step after the square wave reversed u, 20 % off in F_mean even at rtol 1e-12). Each case runs here at the three accuracy
+slipping for a step after the square wave reversed u, 20 % off in F_mean even at rtol 1e-12),
+also on the servo (``gms-3-servo-square``: elements reaching their shares a hair apart, the
+second switched a step late, F_mean 1 % off at rtol 1e-13). Each case runs here at the three accuracy
 levels' tolerances (sweeps.spec.accuracy.LEVELS): Dahl must meet each level's promise
 (TARGET_ERROR, relative) on ``v_mean`` and ``F_mean``; every case must converge to its
 reference at a tight tolerance.
@@ -32,12 +34,13 @@ def _run(case: dict, level: str, integrator: str = "dopri5", rtol: float | None 
     t_end, t_tr = case["window"]
     own = case["own"]
     dither = case.get("dither", "sine-velocity") if W else "none"
+    system = case.get("system", "slider")
     values = {**own}
-    p = registry.pack(case["law"], "slider", values, sigma1=0.0, W=W, omega=omega,
+    p = registry.pack(case["law"], system, values, sigma1=0.0, W=W, omega=omega,
                       v_ref=v_ref, t_end=t_end, t_transient=t_tr, **case["shared"])
-    scene = Scene.from_params(p, friction=case["law"], dither=dither, integrator=integrator,
-                              outputs=("v_mean", "F_mean"),
-                              sizes=registry.sizes_of(case["law"], "slider", values))
+    scene = Scene.from_params(p, system=system, friction=case["law"], dither=dither,
+                              integrator=integrator, outputs=("v_mean", "F_mean"),
+                              sizes=registry.sizes_of(case["law"], system, values))
     tol = LEVELS[level] if rtol is None else {"rtol": rtol, "atol": rtol * 1e-3}
     return simulate(scene, p, Settings(**tol))
 
