@@ -20,8 +20,9 @@ The state vector ``y`` of a point is laid out as
 
 the leading ``n_err`` components under error control (:meth:`MechanicalSystem.error_size`);
 modes are discrete (stick/slip of an element), stored as floats, with zero rate, changed
-only by the law's ``update_modes``: after an accepted step, and where a square-wave dither
-switches (u jumps there, ``landed = -1``).
+only by the law's ``update_modes``: after an accepted step, where a square-wave dither
+switches (u jumps there, ``landed = -1``), and at a step's start for a switch too close
+after it to land on (engine.integrators.adaptive).
 """
 from __future__ import annotations
 
