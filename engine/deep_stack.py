@@ -20,7 +20,8 @@ gives that frame a new chunk twice its size (``push_chunk`` rounds up to a power
 and every frame the compile pushes lives in the other half: no chunk is mapped or unmapped
 until the compile returns (the deepest compile measured, Fig. 14's scene, stayed inside).
 Pages never touched are never committed. A compile nested in a compile (a callee typed
-from its caller) runs on the same stack. The GPU's compiler (numba.cuda) is not wrapped.
+from its caller) runs on the same stack. numba.cuda's dispatcher is not wrapped: engine.gpu
+makes a kernel's first launch, which compiles it, through :func:`on_a_deep_stack`.
 
 numba internals (pinned to 0.68 in pyproject.toml): tests/engine/test_deep_stack.py fails
 if its compiles stop passing through ``Dispatcher.compile``.

@@ -135,8 +135,12 @@ def _launch(kernel, scene, grid: int, stream, args) -> None:
     """``kernel[grid, THREADS_PER_BLOCK, stream](*args)``; a first launch that fails to
     compile is one ValueError naming the rule kernel code breaks."""
     compiled = bool(getattr(kernel, "overloads", True))   # (the simulator compiles nothing)
-    try:   # (a first launch compiles: on a deep data stack, as the CPU's, engine.deep_stack)
-        on_a_deep_stack(kernel[grid, THREADS_PER_BLOCK, stream], *args)
+    try:
+        launch = kernel[grid, THREADS_PER_BLOCK, stream]
+        if compiled:
+            launch(*args)
+        else:   # a first launch compiles: on a deep data stack, as the CPU's (deep_stack)
+            on_a_deep_stack(launch, *args)
     except Exception as exc:   # noqa: BLE001 -- the first launch compiles: numba.cuda's
         if compiled:           # lowering raises bare KeyErrors (a numpy ufunc) as well as
             raise              # NumbaErrors; a launch of a compiled kernel fails as it is

@@ -97,7 +97,7 @@ def _model_scenes(outputs):
                dict(system="contact", friction=law, dither="sine-velocity",
                     outputs=("F_mean", "v_mean")), CONTACT_PROBE, (law, "contact", own))
     for law, own in (("lugre", {}), ("gms", GMS)):
-        for dither in ("none", "sine-velocity"):
+        for dither in ("none", "square-velocity", "sine-velocity"):
             yield (f"servo/{law}/{dither}/dopri5",
                    dict(system="servo", friction=law, dither=dither, outputs=SERVO_OUTPUTS),
                    {**PROBE, "t_end": 30.0, "t_transient": 10.0}, (law, "servo", {**own, **SERVO}))

@@ -237,7 +237,7 @@ def run(law, own, point, window, dither="sine-velocity", system="slider", rtol=1
             x_tr, q_tr = position(t, y), y[-1]
     span = t_end - t_tr
     return {"v_mean": (position(t_end, y) - x_tr) / span, "F_mean": (y[-1] - q_tr) / span,
-            "e_end": float(y[0]), "v_end": float(y[1]), "stops": stops}
+            "e_end": float(y[0]), "v_end": float(y[1]), "stops": stops}   # (servo: x, v)
 
 
 def main():
