@@ -119,7 +119,7 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                       sampling=sampled_record,
                       sample=_record_instant, update_modes=system.update_modes)
     stepper = method_module(scene).make_stepper(problem)
-    solve = make_solve(stepper, observer, scene.dither)
+    solve = make_solve(stepper, observer, scene.dither, system.update_modes)
     init, obs_init, finish, scales = system.init, observer.init, observer.finish, system.scales
     n_err = system.n_err
     if n_err > N_ATOL:

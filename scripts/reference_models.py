@@ -3,22 +3,21 @@
 Method: scipy's ``solve_ivp`` (DOP853, rtol = atol = 1e-10, dense output) on the slider of
 the paper (``de = v_ref - v``, ``dv = e - F``) or on the servo (engine.systems.servo: ``dx =
 v``, ``m dv = kp e - kd v + ki xi - F``, ``dxi = e`` with ``e = x_ref + v_ref t - x``), with
-sine-velocity dither
-``u = v + W sin(omega t)`` or square-velocity dither ``u = v + W sq(omega t)`` (``sq`` = +1
-on ``(k pi / omega, (k + 1) pi / omega)`` for even k, -1 for odd: DESIGN.md), the law's
-equations written out again here in numpy. Every square-wave switch is a stop: u jumps
-there, and the modes follow the law's definition at once (a jump that reverses u sticks
-every slipping element; a stuck element whose force in the new direction of u is at least
-its share slips). Every
-switch is an event of ``solve_ivp`` (terminal): Dahl's ``u = 0`` and ``r = 0``; GMS's
+sine-velocity dither ``u = v + W sin(omega t)`` or square-velocity dither ``u = v + W
+sq(omega t)`` (``sq`` = +1 on ``(k pi / omega, (k + 1) pi / omega)`` for even k, -1 for
+odd: DESIGN.md), the law's equations written out again here in numpy. Every square-wave
+switch is a stop: u jumps there, and the modes follow the law's definition at once (a jump
+that reverses u sticks every slipping element; a stuck element whose force in the new
+direction of u is at least its share slips). Every switch is an event of ``solve_ivp``
+(terminal): Dahl's ``u = 0`` and ``r = 0``; GMS's
 reversal ``u = 0`` and, per stuck element, ``alpha_i s(u) - d F_i = 0`` with ``d`` the
 direction of u over the segment. At each event the integration stops, the modes change by
 which event fired (a reversal sticks every element, an element's event makes it slip in the
 direction of u: the law's definition, not the engine's state-based ``update_modes``; other
 stuck elements at their shares at that instant too slip with it, ``SAME_ROOT``) and it
-restarts, so no step crosses a corner. The mean velocity comes from the spring stretch,
-``v_mean = (x(T) - x(t_tr)) / (T - t_tr)`` with ``x = v_ref t - e``, and the mean friction
-from a quadrature state ``dQ = F``.
+restarts, so no step crosses a corner. The mean velocity comes from the position, ``v_mean =
+(x(T) - x(t_tr)) / (T - t_tr)`` with the slider's ``x = v_ref t - e`` (the servo's own ``x``),
+and the mean friction from a quadrature state ``dQ = F``.
 
 Events are read by ``solve_ivp`` at its step ends only, so a switch crossed and crossed back
 inside one step goes unseen: under dither a step spans at most 1/400 of the dither period

@@ -35,13 +35,11 @@ next step size; this driver does everything else, identically for every method.
   on (-1: none; a landing may stop a hair short of its root, so the index, not the sign of
   the switching function there, says that it was reached); when a mode changed, the
   switching functions are evaluated anew and cached stages refreshed as after a dither
-  switch. Two more places where modes change (docs/ACCURACY.md 5.6): at a square-wave switch
-  (a segment that starts ``FRESH_SWITCH``: u jumps, perhaps through zero), ``update_modes``
-  is called first (``landed = -1``); and a switch whose root lies too close to a step's
-  start to land on (``th_min``; GMS elements that reach their shares a hair apart) was
-  reached at the start: its mode changes there and the step is retaken (``at_start``, once
-  per step). Without either, an element switched a tolerance-dependent step late
-  (``gms-3-square``, ``gms-3-servo-square`` in tests/engine/test_models_reference.py).
+  switch. (At a square-wave switch the driver updates them, engine.integrators.driver.) A
+  switch whose root lies too close to a step's start to land on (``th_min``; GMS elements
+  that reach their shares a hair apart) was reached at the start: its mode changes there
+  and the step is retaken (``at_start``, once per step). Crossed instead, an element slipped
+  a tolerance-dependent step late (``gms-3-servo-square``, docs/ACCURACY.md 5.6).
 - ``FAILED`` once accepted plus rejected steps reach ``cfg.max_steps`` or the step
   underflows (``h < 1e-14 max(1, |t|)``); ``NON_FINITE`` when it underflows because the
   error is not finite (the state blew up).
@@ -74,6 +72,7 @@ from .problem import (
     FRESH_SWITCH,
     Stepper,
     make_sampler,
+    no_modes,
     record_step,
     sample_due,
 )
@@ -87,12 +86,6 @@ UNDERFLOW = 1e-14     # a step below this times max(1, |t|) fails
 W_H, W_REJ, W_K, W_SHORT = 0, 1, 2, 3
 W_METHOD = 4          # the method's own slots start here
 RETAKE = -2           # land(): a switch at the step's start changed the modes there
-
-
-@njit(inline="always", error_model="numpy", refcount=False)
-def _no_modes(t, y, p, sq, landed):
-    """The mode hook of a law without modes (never called)."""
-    return False
 
 
 class Method(NamedTuple):
@@ -137,12 +130,12 @@ def make_stepper(problem, method: Method) -> Stepper:
     graze, probe = problem.graze and n_ev > 0, make_grazing_probe(events, n_ev, dense_eval)
     period_cap = problem.period_cap if n_ev > 0 else 0.0
     before = make_dip_before(events, n_ev, dense_eval, locate)
-    at_start = make_start_switch(events, n_ev, dense_eval, problem.update_modes)
     dips = graze and problem.update_modes is not None   # (the static laws: no need measured)
     first_sample, emit = make_sampler(problem, dense_eval)
     n_g, n_st = max(n_ev, 1), W_METHOD + method.n_state
     modal = problem.update_modes is not None
-    update_modes = problem.update_modes if modal else _no_modes
+    update_modes = problem.update_modes if modal else no_modes
+    at_start = make_start_switch(events, n_ev, dense_eval, update_modes)
 
     @njit(error_model="numpy")
     def alloc():
@@ -208,8 +201,6 @@ def make_stepper(problem, method: Method) -> Stepper:
         yn, ym = Y[0], Y[1]
         rtol, atol = cfg.rtol, cfg.atol_i[:n_err]   # atol per component
         if fresh != FRESH_NONE:
-            if modal and fresh == FRESH_SWITCH:   # the dither's sign jumped u (a reversal
-                update_modes(t0, y, p, sq, -1)   # no step lands on): the modes follow now
             if n_ev:
                 events(t0, y, p, sq, G[0])
             ctr[CTR_EVALS] += restart(t0, t1, y, p, sq, fresh, mw, rtol, atol, st)

@@ -5,7 +5,8 @@ Stops (DESIGN.md §1: "an integrator must step exactly onto them, never across t
 - square-velocity: every switch ``t_k = k * (pi / omega)`` (computed from k, never
   accumulated, :func:`engine.dither.switch_time`); the sign on ``(t_k, t_{k+1})`` is
   ``square_sign(k)``; ``sq`` changes there, so the segment after a switch gets
-  ``FRESH_SWITCH``. Period boundaries are the even k.
+  ``FRESH_SWITCH``, and a law's modes follow u's jump there (``make_solve``). Period
+  boundaries are the even k.
 - sine dither: every period ``k * (2 pi / omega)`` only when an observable needs the
   period boundaries (``period_stops``); the sign stays +1 and caches stay valid.
 - always ``t_transient`` (the observer starts there) and ``t_end``.
@@ -26,15 +27,21 @@ from .. import params as P
 from .. import status as S
 from ..dither import CODE, NONE, SQUARE_VELOCITY, fixed_step, square_sign, switch_time
 from ..jit import njit
-from .problem import FRESH_NONE, FRESH_START, FRESH_SWITCH
+from .problem import FRESH_NONE, FRESH_START, FRESH_SWITCH, no_modes
 
 
-def make_solve(stepper, observer, dither: str):
+def make_solve(stepper, observer, dither: str, update_modes=None):
     """njit ``solve(work, y, p, cfg, obs, ctr, rec) -> status`` for one point.
 
     ``y`` holds the initial state and is advanced to ``t_end`` in place; ``obs`` must have
-    been initialised (``observer.init``).
+    been initialised (``observer.init``). ``update_modes``: the law's, when it has modes
+    (engine.contract); at a square-wave switch u jumps, perhaps through zero (a reversal no
+    step lands on), so the modes follow there, before the next segment (``landed = -1``).
+    Without it a GMS element kept slipping the old way for that segment's first step:
+    ``F_mean`` 20 % off at rtol 1e-12 (``gms-3-square``, docs/ACCURACY.md 5.6).
     """
+    modal = update_modes is not None
+    switch_modes = update_modes if modal else no_modes
     kind = CODE[dither]
     square = kind == SQUARE_VELOCITY
     grid = square or (kind != NONE and observer.period_stops)
@@ -72,6 +79,8 @@ def make_solve(stepper, observer, dither: str):
                 if square:
                     sq = square_sign(k)
                     fresh = FRESH_SWITCH
+                    if modal:
+                        switch_modes(t, y, p, sq, -1)
                 k += 1
         for i in range(y.size):
             if not math.isfinite(y[i]):

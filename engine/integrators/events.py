@@ -209,11 +209,6 @@ def make_dip_before(events, n_events, dense_eval, locate):
     return before
 
 
-@njit(inline="always", error_model="numpy", refcount=False)
-def _no_modes(t, y, p, sq, landed):
-    return False
-
-
 def make_start_switch(events, n_events, dense_eval, update_modes):
     """njit ``at_start(t, hh, y, p, sq, Q, G, ytmp, th_min) -> changed`` for laws with modes:
     the switches whose root lies too close to the step's start to land on (at or before
@@ -222,8 +217,6 @@ def make_start_switch(events, n_events, dense_eval, update_modes):
     GMS elements whose deflections moved together while stuck reach their shares a hair
     apart: after the landing on the first, the next one's root was crossed and its element
     slipped at the step's end, a tolerance-dependent step late (docs/ACCURACY.md 5.6)."""
-    update = update_modes if update_modes is not None else _no_modes
-
     @njit(inline="always", error_model="numpy", refcount=False)
     def at_start(t, hh, y, p, sq, Q, G, ytmp, th_min):
         dense_eval(y, hh, Q, th_min, ytmp)
@@ -231,7 +224,7 @@ def make_start_switch(events, n_events, dense_eval, update_modes):
         changed = False
         for j in range(n_events):
             if G[0, j] != 0.0 and G[0, j] * G[2, j] <= 0.0 and G[0, j] * G[1, j] < 0.0:
-                if update(t, y, p, sq, j):
+                if update_modes(t, y, p, sq, j):
                     changed = True
         if changed:
             events(t, y, p, sq, G[0])

@@ -102,6 +102,12 @@ def record_step(rec, ctr, cfg, t, y):
     record_sample(t, y, ctr, rec)
 
 
+@njit(inline="always", error_model="numpy", refcount=False)
+def no_modes(t, y, p, sq, landed):
+    """The ``update_modes`` hook of a law without modes (never called)."""
+    return False
+
+
 @njit(error_model="numpy", refcount=False)
 def no_sample(t, y, p, sq, obs, ctr, rec):
     """The ``sample`` hook of a problem without sampling (never called)."""

@@ -21,9 +21,9 @@ from .problem import (
     CTR_REJECTED,
     CTR_STEPS,
     FRESH_START,
-    FRESH_SWITCH,
     Stepper,
     make_sampler,
+    no_modes,
     record_step,
     sample_due,
 )
@@ -68,11 +68,6 @@ def _make_dense(tab, n):
     return coeffs, dense_eval
 
 
-@njit(inline="always", error_model="numpy", refcount=False)
-def _no_modes(t, y, p, sq, landed):
-    return False
-
-
 def make_stepper(problem) -> Stepper:
     """Kernel factory (protocol in engine.integrators)."""
     n, rhs, observe = problem.n, problem.rhs, problem.observe
@@ -80,7 +75,7 @@ def make_stepper(problem) -> Stepper:
     coeffs, dense_eval = _make_dense(TABLEAU, n)
     first_sample, emit = make_sampler(problem, dense_eval)
     modal = problem.update_modes is not None
-    update_modes = problem.update_modes if modal else _no_modes
+    update_modes = problem.update_modes if modal else no_modes
     a21, a32, a43 = (float(TABLEAU.a[1, 0]), float(TABLEAU.a[2, 1]), float(TABLEAU.a[3, 2]))
     b1, b2, b3, b4 = (float(x) for x in TABLEAU.b)
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
@@ -99,8 +94,6 @@ def make_stepper(problem) -> Stepper:
         k1, k2, k3, k4, yt, y0, ym, ytmp = R[0], R[1], R[2], R[3], R[4], R[5], R[6], R[7]
         if sampling and fresh == FRESH_START:
             state[0] = first_sample(t0, y, p, sq, cfg, obs, ctr, rec)
-        if modal and fresh == FRESH_SWITCH:   # the dither's sign jumped u: modes follow now
-            update_modes(t0, y, p, sq, -1)
         m = max(1, math.ceil((t1 - t0) / cfg.h * (1.0 - 1e-12)))
         h = (t1 - t0) / m
         for j in range(m):

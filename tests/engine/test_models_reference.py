@@ -5,12 +5,12 @@ The references are ``tests/engine/model_references.json``, made by
 ``scripts/reference_models.py`` (scipy DOP853 at rtol 1e-10, every switch an event; the
 method and its self-check are stated there), under sine-velocity dither, without, and under
 square-velocity dither (``gms-3-square``: until 2026-11-30 the engine kept a GMS element
-slipping for a step after the square wave reversed u, 20 % off in F_mean even at rtol 1e-12),
-also on the servo (``gms-3-servo-square``: elements reaching their shares a hair apart, the
-second switched a step late, F_mean 1 % off at rtol 1e-13). Each case runs here at the three accuracy
-levels' tolerances (sweeps.spec.accuracy.LEVELS): Dahl must meet each level's promise
-(TARGET_ERROR, relative) on ``v_mean`` and ``F_mean``; every case must converge to its
-reference at a tight tolerance.
+slipping for a step after the square wave reversed u, 20 % off in F_mean even at rtol
+1e-12), also on the servo (``gms-3-servo-square``: elements reaching their shares a hair
+apart, the second switched a step late, F_mean 1 % off at rtol 1e-13). Each case runs here
+at the three accuracy levels' tolerances (sweeps.spec.accuracy.LEVELS): Dahl must meet each
+level's promise (TARGET_ERROR, relative) on ``v_mean`` and ``F_mean``; every case must
+converge to its reference at a tight tolerance.
 """
 from __future__ import annotations
 
