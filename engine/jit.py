@@ -41,7 +41,7 @@ from pathlib import Path
 import numba
 import numpy
 
-from . import cache_folders, deep_stack, kernel_cache
+from . import cache_folders, deep_stack, inline_scope, kernel_cache
 from .provenance import cache_root, fingerprint
 
 
@@ -116,7 +116,7 @@ def _helpers_per_fastmath() -> None:
 
 _helpers_per_fastmath()
 deep_stack.install()   # no data-stack chunk mapped per call in a compile (engine.deep_stack)
-
+inline_scope.install()   # one scope copy per IR copy when numba inlines (engine.inline_scope)
 
 _REGISTRIES_LOADED = False
 
