@@ -33,7 +33,7 @@ def switch_time(k, omega):
     return k * (np.pi / omega)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def fixed_step(kind, omega, steps_per_period, h_free):
     """The step of a fixed-step method at dither frequency ``omega``: the square wave's
     half-period ``pi / omega`` or a sine's period ``2 pi / omega`` divided into

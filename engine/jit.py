@@ -34,15 +34,15 @@ import contextlib
 import hashlib
 import os
 import secrets
-import sys
 import threading
 from pathlib import Path
 
 import numba
 import numpy
 
-from . import cache_folders, deep_stack, inline_scope, kernel_cache
+from . import cache_folders, deep_stack, inline_scope, kernel_cache, kernel_parts
 from .provenance import cache_root, fingerprint
+from .registries import load_numba_registries
 
 
 def cache_dir() -> Path:
@@ -118,54 +118,6 @@ _helpers_per_fastmath()
 deep_stack.install()   # no data-stack chunk mapped per call in a compile (engine.deep_stack)
 inline_scope.install()   # one scope copy per IR copy when numba inlines (engine.inline_scope)
 
-_REGISTRIES_LOADED = False
-
-
-def _blas_is_scipys() -> None:
-    """numba.np.arraymath's BLAS probe, answered: scipy (a dependency) carries one."""
-
-
-def load_numba_registries() -> None:
-    """Load numba's CPU typing and target registries now, as numba does at a process's
-    first compile or kernel-cache load, less one probe: importing numba.np.arraymath asks
-    whether a BLAS exists by importing scipy.linalg, 0.35 s of the 0.6 s load here, in
-    every process that runs a kernel (a ``submit``, each pytest worker, a dask worker's
-    fork server; issue 37's warm cheap sweep took 1.9 s in all). ditherlab depends on
-    scipy, so the answer is yes; it decides only arraymath's ``_HAVE_BLAS`` (whether
-    ``np.correlate`` and ``np.convolve`` use BLAS). numba's own ``ensure_blas`` is back
-    before this returns, and the linear algebra that a brought law may call imports
-    scipy.linalg when it is compiled, as before. Nothing changes in a kernel
-    (tests/engine/test_registries.py).
-
-    Called where a kernel is first compiled or loaded (:func:`compile_once`,
-    engine.api.simulate, the analysis path, the fork server's preload); a process whose
-    first compile goes elsewhere runs numba's probe, only slower. Under numba's compiler
-    lock, as numba refreshes: no other thread compiles while the probe is swapped. numba
-    internals (pinned in pyproject.toml): if the probe moves, numba runs it."""
-    global _REGISTRIES_LOADED
-    if _REGISTRIES_LOADED:
-        return
-    from numba.core.compiler_lock import global_compiler_lock
-    from numba.core.registry import cpu_target
-    from numba.np import linalg
-
-    with global_compiler_lock:
-        swap = "numba.np.arraymath" not in sys.modules   # (else numba has probed)
-        probe = getattr(linalg, "ensure_blas", None) if swap else None
-        try:
-            if probe is not None:
-                linalg.ensure_blas = _blas_is_scipys
-            cpu_target.typing_context.refresh()
-            cpu_target.target_context.refresh()
-        finally:
-            if probe is not None:
-                linalg.ensure_blas = probe
-                arraymath = sys.modules.get("numba.np.arraymath")
-                if getattr(arraymath, "ensure_blas", None) is _blas_is_scipys:
-                    arraymath.ensure_blas = probe   # (its own name, bound at import)
-        _REGISTRIES_LOADED = True
-
-
 _STABLE = (bool, int, float, complex, str, bytes, type(None))
 
 
@@ -215,7 +167,7 @@ def _name_by_uuid(func, uuid: str | None) -> None:
         func.__code__ = func.__code__.replace(co_qualname=name)
 
 
-def njit(fn=None, *, refcount: bool = True, **options):
+def njit(fn=None, *, refcount: bool = True, entry: bool = False, **options):
     """``numba.njit(cache=True, nogil=True, **options)`` with a deterministic dispatcher
     UUID. ``nogil``: a kernel called from Python releases the GIL while it runs, so
     threads of one process compute blocks side by side (a small sweep runs in the
@@ -227,7 +179,12 @@ def njit(fn=None, *, refcount: bool = True, **options):
     issue #2345 shows the cost); in the DP5 step loop those pairs were a quarter of the
     time (50.8 -> 39.4 ns per right-hand-side evaluation on the fig10 benchmark, against
     34 ns for C). Allocation in such a kernel fails at compile time, never silently.
+
+    ``entry=True`` for a function that Python calls (a kernel): the others are kernel parts,
+    compiled without a CPython wrapper (engine.kernel_parts).
     """
+    if not entry:
+        options["no_cpython_wrapper"] = True
     options["cache"] = options.get("cache", True) and _ENGINE_CACHE is not None   # (or none)
     options.setdefault("nogil", True)   # a block kernel lets other threads run (sweeps.run)
     if not refcount:
@@ -240,6 +197,8 @@ def njit(fn=None, *, refcount: bool = True, **options):
         if _ENGINE_CACHE is not None:   # (a config reload may have reset it)
             numba.config.CACHE_DIR = _ENGINE_CACHE
         dispatcher = numba.njit(**options)(func)
+        if not entry:
+            kernel_parts.part(dispatcher)
         if options["cache"]:
             kernel_cache.uncached_elsewhere(dispatcher)
         if uuid is not None:

@@ -52,7 +52,7 @@ def force_and_slope(avg, v, sigma2, model):
     return F, dY * (1.0 - avg[C]) - Y * avg[DC] + avg[DB] + sigma2
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _forces(avg, v, sigma2, model, F, dF):
     for i in range(v.size):
         F[i], dF[i] = force_and_slope(avg[i], v[i], sigma2, model)

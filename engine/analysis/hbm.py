@@ -41,7 +41,7 @@ from ..jit import njit
 _force = make_force(bristle_damping=True, viscous=True)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _g(u, p):
     """g(u) (Eq. 2.4) over an array."""
     out = np.empty(u.size)
@@ -50,7 +50,7 @@ def _g(u, p):
     return out
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _friction_force(u, z, p):
     """F = sigma0 z + sigma1(u) dz + sigma2 u with dz/dt of Eq. A.2 (the LuGre bristle
     rate), over arrays of u and z."""

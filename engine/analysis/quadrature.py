@@ -107,7 +107,7 @@ def phase_average(out, v, W, rule, x, wx, p, side):
         _add_piece(out, v, Wa, 0.0, np.pi, x, wx, p, side)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _averages_kernel(v, W, vd, p, rule, x, wx, side, out):
     pv = p.copy()   # the point's parameters: vd varies along the grid
     for i in range(v.size):

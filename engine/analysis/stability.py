@@ -113,7 +113,7 @@ def jacobian_max_real_eig(a, b, c, d):
     return math.ldexp(lam, k)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _linearise(avg, v, sigma0, sigma2, J, F, lam):
     for i in range(v.size):
         a, b, c, d = _entries(avg[i], v[i], sigma0, sigma2)
@@ -122,7 +122,7 @@ def _linearise(avg, v, sigma0, sigma2, J, F, lam):
         lam[i] = jacobian_max_real_eig(a, b, c, d)
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", entry=True)
 def _structured_max_real_eig(a, b, c, d, out):
     for i in range(out.size):
         out[i] = jacobian_max_real_eig(a[i], b[i], c[i], d[i])

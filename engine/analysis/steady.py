@@ -62,7 +62,7 @@ def _kernel(scene):
                 total += half * wx[k] / np.pi * steady(v + Wa * np.cos(mid + half * x[k]), p)
         return total
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", entry=True)
     def run(v, W, rule, x, wx, p, F, dF):
         for i in range(v.size):
             F[i] = average(v[i], W[i], rule, x, wx, p)

@@ -137,7 +137,7 @@ def make_stepper(problem, method: Method) -> Stepper:
     update_modes = problem.update_modes if modal else no_modes
     at_start = make_start_switch(events, n_ev, dense_eval, update_modes)
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", entry=True)   # (engine.api calls it)
     def alloc():
         return (m_alloc(), np.zeros((n_dense, n)), np.zeros((3, n)), np.zeros((5, n_g)),
                 np.zeros(n_st))

@@ -81,7 +81,7 @@ def make_stepper(problem) -> Stepper:
     c2, c3, c4 = (float(x) for x in TABLEAU.c[1:])
     m1, m2, m3, m4 = _mid_weights(TABLEAU)
 
-    @njit(inline="always", error_model="numpy")
+    @njit(inline="always", error_model="numpy", entry=True)   # (engine.api calls it)
     def alloc():
         # rows k1..k4, yt, y0, ym, ytmp; Q: dense coefficients; state[0]: next sampling index
         return np.empty((8, n)), np.empty((3, n)), np.zeros(1)

@@ -13,6 +13,7 @@ and joins them into a :class:`System`:
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import NamedTuple
 
 from .. import registry
@@ -43,8 +44,17 @@ class System(NamedTuple):
     outputs: object       # the system's own observables (engine.contract.SystemOutputs)
 
 
-def build_context(scene, jit=njit) -> tuple:
+def probed(scene) -> bool:
+    """A model of ``scene`` is brought: engine.systems.first_step calls its parts and the
+    composed system's from Python, so they compile as entries (``njit(entry=True)``, with
+    CPython wrappers, cached; engine.kernel_parts)."""
+    return registry.is_import_path(scene.friction) or registry.is_import_path(scene.system)
+
+
+def build_context(scene, jit=None) -> tuple:
     """``(law, system, Build)`` of ``scene``: its models and their layout in y and p."""
+    if jit is None:
+        jit = partial(njit, entry=True) if probed(scene) else njit
     law, sysm = registry.law(scene.friction), registry.system(scene.system)
     for ref, digest in scene.digests:
         # the source this process imported (a long-lived serve keeps the module it imported
@@ -86,10 +96,10 @@ def make_system(scene) -> System:
     sys_scales, law_scales = sk.scales, lk.scales
     n_events = lk.n_switches if lk.switches is not None else 0
     switches = lk.switches
-
+    entry = probed(scene)   # (its parts are called from Python: engine.systems.first_step)
     m0 = b.m0
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", entry=entry)
     def rhs(t, y, p, sq, dy):
         u, fext, hold = drive(t, y, p, sq)
         F = rates(u, y, dy, hold, p)
@@ -99,29 +109,29 @@ def make_system(scene) -> System:
         for i in range(m0, n):   # modes change only in update_modes, never by a rate
             dy[i] = 0.0
 
-    @njit(inline="always", error_model="numpy")
+    @njit(inline="always", error_model="numpy", entry=entry)
     def interface(t, y, p, sq):
         u, _, hold = drive(t, y, p, sq)
         F, a = force(u, y, hold, p)
         return u, F, a
 
     if n_events:
-        @njit(error_model="numpy")
+        @njit(error_model="numpy", entry=entry)
         def events(t, y, p, sq, g):
             u, _, hold = drive(t, y, p, sq)
             switches(u, y, hold, p, g)
     else:
-        @njit(error_model="numpy")
+        @njit(error_model="numpy", entry=entry)
         def events(t, y, p, sq, g):
             pass
 
-    @njit(inline="always", error_model="numpy")
+    @njit(inline="always", error_model="numpy", entry=entry)
     def init(p, y):
         y[:] = 0.0
         sys_init(p, y)
         law_init(p, y)
 
-    @njit(error_model="numpy")
+    @njit(error_model="numpy", entry=entry)
     def scales(p, out):
         sys_scales(p, out)
         law_scales(p, out)

@@ -103,7 +103,7 @@ def _loop(scene):
 
     interface = slider.make_interface(scene)
 
-    @njit
+    @njit(entry=True)
     def loop(t, y, p, sq, out):
         for i in range(t.size):
             u, F, a = interface(t[i], y[i], p, sq[i])

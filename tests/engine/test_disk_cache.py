@@ -107,7 +107,7 @@ FACTORY = """
 from engine.jit import njit
 
 def make(a):
-    @njit
+    @njit(entry=True)   # (called from Python: a kernel, cached with its wrapper)
     def scale(x):
         return x * a
     return scale

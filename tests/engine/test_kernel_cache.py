@@ -25,7 +25,7 @@ KERNEL = '''
 from engine.jit import njit
 
 
-@njit(error_model="numpy")
+@njit(error_model="numpy", entry=True)   # (called from Python: cached with its wrapper)
 def scaled(x):
     return x * 1.2345678901234567 + 0.5
 '''
