@@ -14,7 +14,7 @@ import numpy as np
 from . import params as P
 from . import status as S
 from .jit import compile_once, load_numba_registries
-from .kernels import block_kernel, make_config, point_kernel
+from .kernels import block_kernel, block_work, make_config, point_kernel
 from .observables import N_HIST
 from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings
@@ -78,7 +78,8 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
         status = np.full(m, S.NOT_COMPUTED, dtype=np.int8)
         counters = np.zeros((m, 3), dtype=np.int64)
         kernel = block_kernel(scene)
-        args = (points, p, make_config(settings), out, status, counters)
+        args = (points, p, make_config(settings), out, status, counters,
+                *block_work(scene, p))
         compile_once(kernel, args, scene)   # (once per machine: the others load it)
         t0 = time.perf_counter()
         kernel(*args)

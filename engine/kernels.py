@@ -170,26 +170,40 @@ def point_kernel(scene, sampled_record: bool = False) -> PointKernel:
                        run_point, stepper.shapes, inlined)
 
 
+def _zeros(shapes):
+    """Arrays of zeros shaped as ``shapes`` (nested tuples of shapes, as Stepper.shapes)."""
+    if shapes and isinstance(shapes[0], int):
+        return np.zeros(shapes)
+    return tuple(_zeros(s) for s in shapes)
+
+
+def block_work(scene, p: np.ndarray) -> tuple:
+    """The scratch the block kernel of ``scene`` borrows, allocated here by numpy: the
+    method's work (shaped by ``Stepper.shapes``; else its own ``alloc()``), a copy of ``p``,
+    the state, the accumulators, one row of outputs, the counters and an empty record."""
+    pk = point_kernel(scene)
+    work = pk.alloc() if pk.shapes is None else _zeros(pk.shapes)
+    return (work, np.empty_like(p), np.empty(pk.n), np.empty(pk.obs_size), np.empty(pk.n_out),
+            np.zeros(CTR_SIZE, np.int64), np.empty((0, pk.n + 1)))
+
+
 @cache
 def block_kernel(scene) -> Callable:
-    """njit ``run(points, p, cfg, out, status, counters)`` over a block of grid points.
+    """njit ``run(points, p, cfg, out, status, counters, *block_work(scene, p))`` over a
+    block of grid points.
 
     ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out``
-    ``(m, n_out)``: the scene's scalar outputs in order, then the alpha_hist shares; ``status`` ``(m,)`` int8; ``counters``
-    ``(m, 3)`` int64: accepted steps, rejected steps, evaluations.
+    ``(m, n_out)``: the scene's scalar outputs in order, then the alpha_hist shares;
+    ``status`` ``(m,)`` int8; ``counters`` ``(m, 3)`` int64: accepted steps, rejected steps,
+    evaluations. It allocates nothing (its scratch comes from :func:`block_work`).
     """
     pk = point_kernel(scene)
-    n, size, k = pk.n, pk.obs_size, pk.n_out
-    alloc, run_point = pk.alloc, pk.inlined
+    k = pk.n_out
+    run_point = pk.inlined
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 
-    @njit(error_model="numpy", entry=True)
-    def run(points, p, cfg, out, status, counters):
-        q = p.copy()
-        y, obs, o = np.empty(n), np.empty(size), np.empty(k)
-        work = alloc()
-        ctr = np.zeros(CTR_SIZE, np.int64)
-        rec = np.empty((0, n + 1))
+    @njit(error_model="numpy", entry=True, refcount=False)
+    def run(points, p, cfg, out, status, counters, work, q, y, obs, o, ctr, rec):
         # element loops, not ``out[j, :] = o``: an array-to-array slice assignment makes
         # numba compile its shape-mismatch message (str, repr, concatenation: ~3 s of the
         # first compile in each process that compiles), for an error these shapes cannot
