@@ -12,7 +12,8 @@ with its inlined step loop took 1.70 s of that scene's 5.7 s first compile.
 
 :func:`install` wraps ``inline_ir`` so that, while it runs, the blocks copied from one scope
 share one copy of it: their ``Var``\\ s point to it, as the original blocks' point to the
-original scope. numba itself used only the first block's copy (``_get_all_scopes``
+original scope. Only the callee's scope and its copy are shared so; a block of another
+function copied meanwhile (a compile that ``inline_ir`` starts) is copied as numba does. numba itself used only the first block's copy (``_get_all_scopes``
 compares the copies by value and finds one; it renames the variables in that one), the
 others were dropped when the inlined blocks join the caller's scope. Everything else in a
 block is copied as before. The optimised LLVM IR and the machine code of the block kernels
@@ -27,18 +28,19 @@ from __future__ import annotations
 import copy
 import threading
 
-_SHARED = threading.local()   # while inline_ir runs: {id(scope): (scope, its one copy)}
+_SHARED = threading.local()   # while inline_ir runs: {id(scope): None or (scope, its copy)}
 
 
 def _copy_block(block, memo):
     """``copy.deepcopy`` of an ``ir.Block`` (what deepcopy does for a plain object: a new
     instance, its ``__dict__`` copied), seeded inside ``inline_ir`` with its scope's copy."""
     shared = getattr(_SHARED, "scopes", None)
-    if shared is not None:
-        scope = block.scope
-        pair = shared.get(id(scope))
+    scope = block.scope
+    if shared is not None and id(scope) in shared:   # (the callee's scope, or its copy)
+        pair = shared[id(scope)]
         if pair is None:   # (the scope itself kept in the pair: its id stays unique)
             pair = shared[id(scope)] = (scope, copy.deepcopy(scope))
+            shared.setdefault(id(pair[1]), None)   # (copied again: the unmutated copy)
         memo.setdefault(id(scope), pair[1])
     new = type(block).__new__(type(block))
     memo[id(block)] = new
@@ -56,8 +58,11 @@ def install() -> None:
         return   # (installed, or numba copies its blocks its own way now: left alone)
 
     def inline_ir(self, *args, **kws):
+        callee = args[3] if len(args) > 3 else kws["callee_ir"]
         outer = getattr(_SHARED, "scopes", None)
-        _SHARED.scopes = {}
+        # only the callee's scopes: a compile inside inline_ir (numba types an overload it
+        # inlines) copies its own blocks as numba does, each copy with its scope as it is then
+        _SHARED.scopes = {id(b.scope): None for b in callee.blocks.values()}
         try:
             return original(self, *args, **kws)
         finally:

@@ -161,7 +161,10 @@ def _name_by_uuid(func, uuid: str | None) -> None:
     rebuilt from a pickle keeps the name.
     """
     tag = uuid[len("ditherlab-"):][:16] if uuid else secrets.token_hex(8)
-    name = f"{func.__qualname__}__{tag}"
+    _rename(func, f"{func.__qualname__}__{tag}")
+
+
+def _rename(func, name: str) -> None:
     func.__qualname__ = name
     if hasattr(func.__code__, "co_qualname"):     # Python >= 3.11
         func.__code__ = func.__code__.replace(co_qualname=name)
@@ -191,6 +194,11 @@ def njit(fn=None, *, refcount: bool = True, entry: bool = False, **options):
         options["_nrt"] = False
 
     def decorate(func):
+        if entry and "<locals>" in func.__qualname__:
+            # a factory's function can be an entry in one scene and a part in another
+            # (engine.systems.probed); their machine code must not share a cache entry: a
+            # part's has no wrapper for Python to call (module-level ones are made once)
+            _rename(func, func.__qualname__ + "__entry")
         uuid = closure_uuid(func)
         if func.__closure__:
             _name_by_uuid(func, uuid)

@@ -3,13 +3,15 @@
 numba compiles every ``njit`` function with a CPython wrapper: machine code that unboxes
 Python arguments (arrays, records, tuples), calls the function and boxes its result, so
 that Python can call it. The engine's functions are built by factories and called from
-other jitted functions, almost none from Python: only the block kernel, the point kernel,
-a method's ``alloc``, the analysis paths' kernels, ``engine.dither.fixed_step`` (the spec's
-step check) and every part of a scene with a brought model, which engine.systems.first_step
-calls one by one (``njit(entry=True)``; engine.systems.probed). The other functions'
-wrappers (a right-hand side, a law, DP5's attempt, the event locator, ...) were generated,
-optimised, turned into machine code and cached for nothing: 0.4-0.5 s of the cheap sweep
-scene's 4.6 s first compile, 27 functions (docs/PERFORMANCE.md).
+other jitted functions, almost none from Python (``njit(entry=True)`` marks those): the
+block kernel, the point kernel, a method's ``alloc``, the analysis paths' kernels,
+``engine.dither.fixed_step`` (the spec's step check), the gallery's trajectory loop, and
+every part of a scene with a brought model, which engine.systems.first_step calls one by
+one (engine.systems.probed). The other functions' wrappers (a right-hand side, a law, DP5's
+attempt, the event locator, ...) were generated, optimised, turned into machine code and
+cached for nothing: 0.4-0.5 s of the cheap sweep scene's 4.6 s first compile, 27 functions
+(docs/PERFORMANCE.md). An entry made by a factory is named apart from the same function
+as a part (engine.jit.njit), so the two never share a cache entry.
 
 So :func:`engine.jit.njit` compiles a function that is not an entry with numba's
 ``no_cpython_wrapper`` and makes its dispatcher a :class:`KernelPart`. numba's own call
@@ -54,7 +56,9 @@ class KernelPart(CPUDispatcher):
         return twin
 
 
-def part(dispatcher) -> KernelPart:
-    """``dispatcher`` (compiled with ``no_cpython_wrapper``) as a :class:`KernelPart`."""
-    dispatcher.__class__ = KernelPart
+def part(dispatcher):
+    """``dispatcher`` (compiled with ``no_cpython_wrapper``) as a :class:`KernelPart`
+    (unchanged where it is none: ``NUMBA_DISABLE_JIT=1`` makes njit return the function)."""
+    if type(dispatcher) is CPUDispatcher:
+        dispatcher.__class__ = KernelPart
     return dispatcher

@@ -28,7 +28,7 @@ from .integrators.problem import (
     Problem,
     record_sample,
 )
-from .jit import njit
+from .jit import compile_once, njit
 from .observables import N_HIST, make_observer
 from .settings import Settings
 from .systems import make_system
@@ -195,7 +195,11 @@ def block_work(scene, p: np.ndarray) -> tuple:
     method's work (shaped by ``Stepper.shapes``; else its own ``alloc()``), a copy of ``p``,
     the state, the accumulators, one row of outputs, the counters and an empty record."""
     pk = point_kernel(scene)
-    work = pk.alloc() if pk.shapes is None else _zeros(pk.shapes)
+    if pk.shapes is None:   # (compiled once per machine, as the kernels: engine.jit)
+        compile_once(pk.alloc, (), scene)
+        work = pk.alloc()
+    else:
+        work = _zeros(pk.shapes)
     return (work, _scratch(p.shape), _scratch((pk.n,)), _scratch((pk.obs_size,)),
             _scratch((pk.n_out,)), _scratch((CTR_SIZE,), np.int64), np.empty((0, pk.n + 1)))
 
@@ -208,14 +212,17 @@ def block_kernel(scene) -> Callable:
     ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out``
     ``(m, n_out)``: the scene's scalar outputs in order, then the alpha_hist shares;
     ``status`` ``(m,)`` int8; ``counters`` ``(m, 3)`` int64: accepted steps, rejected steps,
-    evaluations. It allocates nothing (its scratch comes from :func:`block_work`).
+    evaluations. Its scratch comes from :func:`block_work`. It keeps numba's runtime
+    (NRT): ``run_point`` is compiled into it, and with it a model's ``init`` and an output's
+    ``finish``, which may allocate (a brought law's ``np.zeros`` in ``init`` did not
+    compile without it).
     """
     pk = point_kernel(scene)
     k = pk.n_out
     run_point = pk.inlined
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 
-    @njit(error_model="numpy", entry=True, refcount=False)
+    @njit(error_model="numpy", entry=True)
     def run(points, p, cfg, out, status, counters, work, q, y, obs, o, ctr, rec):
         # element loops, not ``out[j, :] = o``: an array-to-array slice assignment makes
         # numba compile its shape-mismatch message (str, repr, concatenation: ~3 s of the

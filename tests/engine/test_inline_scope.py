@@ -100,3 +100,22 @@ def test_a_block_copied_elsewhere_is_copied_whole():
     twin = copy.deepcopy(block)
     assert twin is not block and twin.scope is not scope
     assert twin.scope.get("x").name == "x" and twin.body[0].value == "x"
+
+
+def test_only_the_callee_s_scope_is_shared():
+    """While inline_ir runs, the callee's blocks (and its copy's) share one scope copy; a
+    block of another function copied meanwhile (a compile inline_ir starts) is copied as
+    numba does, its scope with it (a review of 33cdc22)."""
+    loc = ir.Loc("f.py", 1)
+    callee, other = ir.Scope(None, loc), ir.Scope(None, loc)
+    blocks = [ir.Block(s, loc) for s in (callee, callee, other, other)]
+    inline_scope._SHARED.scopes = {id(callee): None}
+    try:
+        a, b, c, d = (copy.deepcopy(x) for x in blocks)
+        again = copy.deepcopy(a)   # (inline_ir copies its working copy once more)
+        again_b = copy.deepcopy(b)
+    finally:
+        inline_scope._SHARED.scopes = None
+    assert a.scope is b.scope and a.scope is not callee
+    assert c.scope is not d.scope and c.scope is not other and d.scope is not other
+    assert again.scope is not a.scope and again_b.scope is again.scope

@@ -92,3 +92,73 @@ def test_a_part_loaded_from_the_disk_cache_links_into_a_new_kernel(tmp_path):
     for r in (second, third):
         assert r["kernel"] == first["kernel"]
         assert r["part_from_python"] == first["part_from_python"]
+
+
+FACTORY = '''
+import os
+from engine.jit import njit
+ENTRY = os.environ.get("ENTRY") == "1"
+
+
+def make(a):
+    @njit(error_model="numpy", entry=ENTRY)
+    def scaled(x):   # a closure
+        return x * a
+
+    @njit(error_model="numpy", entry=ENTRY)
+    def first(y):    # none: cached by its qualified name alone
+        y[0] = 1.5
+    return scaled, first
+
+
+scaled, first = make(2.0)
+
+
+@njit(error_model="numpy", entry=True)
+def kernel(y):
+    first(y)
+    return scaled(y[0])
+'''
+CALLS = '''
+import json, os
+import numpy as np
+import factory
+y = np.zeros(2)
+if os.environ.get("ENTRY") == "1":
+    factory.first(y)
+    print(json.dumps({"value": factory.scaled(y[0]),
+                      "loaded": sum(factory.scaled.stats.cache_hits.values())
+                      + sum(factory.first.stats.cache_hits.values())}))
+else:
+    print(json.dumps({"value": factory.kernel(y)}))
+'''
+
+
+def test_a_factory_s_entry_never_loads_the_same_function_cached_as_a_part(tmp_path):
+    """One factory function can be a part in one scene and an entry in another
+    (engine.systems.probed). numba's cache index does not tell them apart, so an entry
+    called from Python loaded the part's machine code, which has no wrapper: a
+    segmentation fault (a review of 33cdc22). An entry made by a factory is named apart."""
+    (tmp_path / "factory.py").write_text(FACTORY)
+    env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "cache"),
+           "PYTHONPATH": os.pathsep.join([str(tmp_path), os.getcwd()])}
+    runs = []
+    for entry in ("0", "1", "1"):   # the parts cached; the entries compiled, then loaded
+        out = subprocess.run([sys.executable, "-c", CALLS], env={**env, "ENTRY": entry},
+                             capture_output=True, text=True, cwd=tmp_path, timeout=600)
+        assert out.returncode == 0, (entry, out.returncode, out.stderr[-3000:])
+        runs.append(json.loads(out.stdout.strip().splitlines()[-1]))
+    assert [r["value"] for r in runs] == [3.0, 3.0, 3.0]
+    assert (runs[1]["loaded"], runs[2]["loaded"]) == (0, 2)
+
+
+def test_the_engine_imports_and_runs_with_numba_s_jit_off(tmp_path):
+    """``NUMBA_DISABLE_JIT=1`` (numba's debugging switch) makes njit return the function
+    itself, which is no dispatcher to make a KernelPart of (a review of 33cdc22)."""
+    code = ("from engine.dither import fixed_step, CODE\n"
+            "print(fixed_step(CODE['square-velocity'], 10.0, 8, 0.01))")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "DITHERLAB_CACHE_DIR": str(tmp_path)}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert float(out.stdout.split()[-1]) > 0.0

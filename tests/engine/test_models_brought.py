@@ -357,6 +357,33 @@ def test_a_number_where_a_vector_parameter_takes_a_list_is_one_line():
         load_spec(spec)
 
 
+def test_a_law_whose_init_allocates_runs_in_a_block_as_in_the_api(tmp_path, monkeypatch):
+    """docs/MODELS.md does not forbid allocating in a model's kernels. The block kernel
+    compiles run_point into itself; compiled without numba's runtime (a review of 33cdc22)
+    it refused ``np.zeros`` in such an ``init``, after the spec check had passed: every
+    block failed. The block and the API give the same bits."""
+    import numpy as np
+
+    from engine import params as P
+    from engine.blocks import run_block
+
+    source = _law().replace("from engine", "import numpy as np\nfrom engine").replace(
+        "            y[Z] = 0.0", "            tmp = np.zeros(2)\n            y[Z] = tmp[0]")
+    (tmp_path / "allocinit.py").write_text(textwrap.dedent(source))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    plan = make_plan(load_spec({"friction": "allocinit:X", "dither": "sine-velocity",
+                                "outputs": ["v_mean"], "time": {"t_end": 0.5,
+                                                                "t_transient": 0.1},
+                                "grid": {"W": [0.3], "omega": [20.0], "v_ref": [0.1]}}))
+    res = run_block(plan.scene, plan.block_points(0), plan.params, plan.numerics.settings)
+    q = plan.params.copy()
+    q[[P.W, P.OMEGA, P.V_REF, P.VD]] = plan.block_points(0)[0]
+    one = simulate(plan.scene, q, plan.numerics.settings)
+    assert list(res.status) == [one.status] == [0]
+    assert res.outputs["v_mean"][0].tobytes() == np.float64(one.outputs["v_mean"]).tobytes()
+    sys.modules.pop("allocinit", None)
+
+
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_user_code_is_one_line(case, tmp_path, monkeypatch):
     source, attr, params, says = BAD[case]
