@@ -31,7 +31,7 @@ from .integrators.problem import (
 from .jit import compile_once, njit
 from .observables import N_HIST, make_observer
 from .settings import Settings
-from .systems import make_system
+from .systems import make_system, probed
 
 
 class PointKernel(NamedTuple):
@@ -212,17 +212,20 @@ def block_kernel(scene) -> Callable:
     ``points`` ``(m, 4)``: columns W, omega, v_ref, vd overriding ``p``; ``out``
     ``(m, n_out)``: the scene's scalar outputs in order, then the alpha_hist shares;
     ``status`` ``(m,)`` int8; ``counters`` ``(m, 3)`` int64: accepted steps, rejected steps,
-    evaluations. Its scratch comes from :func:`block_work`. It keeps numba's runtime
-    (NRT): ``run_point`` is compiled into it, and with it a model's ``init`` and an output's
-    ``finish``, which may allocate (a brought law's ``np.zeros`` in ``init`` did not
-    compile without it).
+    evaluations. Its scratch comes from :func:`block_work`, so it allocates nothing itself
+    and compiles without numba's runtime (NRT; 0.2-0.3 s of the cheap scene's first
+    compile), unless a model is brought: ``run_point`` is compiled into it, and with it
+    the model's ``init`` and its outputs' ``finish``, which may allocate (a brought law's
+    ``np.zeros`` in ``init`` did not compile without NRT: every block failed after the
+    spec check had passed). The built-in models allocate nothing there; if one did, its
+    kernel would not compile (a TypingError in every test that runs it), never run wrong.
     """
     pk = point_kernel(scene)
     k = pk.n_out
     run_point = pk.inlined
     cols = (P.W, P.OMEGA, P.V_REF, P.VD)
 
-    @njit(error_model="numpy", entry=True)
+    @njit(error_model="numpy", entry=True, refcount=probed(scene))
     def run(points, p, cfg, out, status, counters, work, q, y, obs, o, ctr, rec):
         # element loops, not ``out[j, :] = o``: an array-to-array slice assignment makes
         # numba compile its shape-mismatch message (str, repr, concatenation: ~3 s of the
