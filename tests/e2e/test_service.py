@@ -385,7 +385,12 @@ def test_partial_and_failed_are_told_apart(tmp_path, monkeypatch, capsys):
         submit(plan, crash, progress=False)
     row = _row(crash, plan.sweep_id)
     assert row["state"] == "failed" and row["owner"] == ""
-    assert "the run crashed after 4/8 blocks: RuntimeError: the cluster went away" in \
+    # how many of the four W <= 0.4 blocks finish before the first crash is seen depends on
+    # the threads (a block still queued then is cancelled: 3 of 4 in one CI run, 2026-11-30);
+    # the message counts what the journal kept
+    kept = _journaled(crash, plan.sweep_id)
+    assert kept <= 4 and row["done_blocks"] == kept
+    assert f"the run crashed after {kept}/8 blocks: RuntimeError: the cluster went away" in \
         row["message"]
     assert row["done_blocks"] == 4 and row["done_points"] == 4
 
