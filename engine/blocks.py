@@ -67,7 +67,7 @@ def run_block(scene: Scene, points, p, settings: Settings | None = None) -> Bloc
         return _analysis(scene, points, p)
     settings = settings or Settings()
     m = points.shape[0]
-    pk = point_kernel(scene)
+    pk = point_kernel(scene, record=False)   # (the block kernel's: engine.kernels)
     names = pk.names
     if settings.device == "cuda":
         from . import gpu
