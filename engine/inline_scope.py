@@ -13,12 +13,13 @@ with its inlined step loop took 1.70 s of that scene's 5.7 s first compile.
 :func:`install` wraps ``inline_ir`` so that, while it runs, the blocks copied from one scope
 share one copy of it: their ``Var``\\ s point to it, as the original blocks' point to the
 original scope. Only the callee's scope and its copy are shared so; a block of another
-function copied meanwhile (a compile that ``inline_ir`` starts) is copied as numba does. numba itself used only the first block's copy (``_get_all_scopes``
-compares the copies by value and finds one; it renames the variables in that one), the
-others were dropped when the inlined blocks join the caller's scope. Everything else in a
-block is copied as before. The optimised LLVM IR and the machine code of the block kernels
-of the cheap scene, Fig. 10's, Fig. 14's and docs/examples/servo-gms.toml's are the same
-with and without it; the driver's compile took 1.16 s (docs/PERFORMANCE.md).
+function copied meanwhile (a compile that ``inline_ir`` starts) is copied as numba does.
+numba itself used only the first block's copy (``_get_all_scopes`` compares the copies by
+value and finds one; it renames the variables in that one), the others were dropped when
+the inlined blocks join the caller's scope. Everything else in a block is copied as before.
+The optimised LLVM IR and the machine code of the block kernels of the cheap scene, Fig.
+10's, Fig. 14's and docs/examples/servo-gms.toml's are the same with and without it; the
+driver's compile took 1.16 s (docs/PERFORMANCE.md).
 
 numba internals (pinned to 0.68 in pyproject.toml): tests/engine/test_inline_scope.py fails
 if ``inline_ir`` moves or stops copying through ``ir.Block``.
