@@ -13,7 +13,8 @@ import numpy as np
 
 from . import params as P
 from .integrators.problem import CTR_EVALS, CTR_NREC, CTR_REJECTED, CTR_SIZE, CTR_STEPS
-from .jit import compile_once, load_numba_registries
+from .compiling import compile_once
+from .jit import load_numba_registries
 from .kernels import make_config, point_kernel
 from .scene import ANALYSIS_PATHS, Scene
 from .settings import Settings

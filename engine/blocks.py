@@ -13,7 +13,8 @@ import numpy as np
 
 from . import params as P
 from . import status as S
-from .jit import compile_once, load_numba_registries
+from .compiling import compile_once
+from .jit import load_numba_registries
 from .kernels import block_kernel, block_work, make_config, point_kernel
 from .observables import N_HIST
 from .scene import ANALYSIS_PATHS, Scene

@@ -13,7 +13,7 @@ to 3.3 s of system time), Fig. 14's in 18.8-20.6 s on a thread; on a deep stack,
 and 9.4 s, with 0.2 s of system time (AMD EPYC, 2 cores; docs/PERFORMANCE.md).
 
 :func:`install` wraps numba's compile of a CPU function, ``Dispatcher.compile`` (called by
-engine.jit.compile_once, and by a dispatcher called from Python with argument types it has
+engine.compiling.compile_once, and by a dispatcher called from Python with argument types it has
 no machine code for), so that the compile runs in a frame of :func:`_on_a_deep_stack`,
 whose code object claims an evaluation stack of ``RESERVE`` bytes it never uses. CPython
 gives that frame a new chunk twice its size (``push_chunk`` rounds up to a power of two),

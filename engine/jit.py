@@ -30,11 +30,9 @@ the engine starts a fresh cache; folders unused for 30 days are removed (engine.
 """
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
 import secrets
-import threading
 from pathlib import Path
 
 import numba
@@ -218,50 +216,3 @@ def njit(fn=None, *, refcount: bool = True, entry: bool = False, **options):
         return dispatcher
 
     return decorate(fn) if fn is not None else decorate
-
-
-_HELD = threading.local()   # the scenes whose compile lock this thread holds
-
-
-@contextlib.contextmanager
-def compile_lock(scene):
-    """Held while this process compiles or loads ``scene``'s kernels: an exclusive ``flock``
-    on ``<kernel cache>/compiling/<scene hash>.lock``, so that the processes of one machine
-    (dask workers, pytest workers, two commands at once) compile a scene once, not once
-    each: the others wait, then load it from the cache. Re-entrant in a thread (a sweep's
-    warm-up holds it around :func:`engine.blocks.run_block`, which takes it too); released
-    by the kernel when a holder dies; without a writable cache folder, no lock (each
-    process compiles)."""
-    import fcntl
-
-    name = hashlib.sha1(repr(scene).encode()).hexdigest()[:16]
-    held = _HELD.__dict__.setdefault("names", set())
-    if name in held:
-        yield
-        return
-    try:
-        folder = cache_dir() / "compiling"
-        folder.mkdir(parents=True, exist_ok=True)
-        fd = os.open(folder / f"{name}.lock", os.O_RDWR | os.O_CREAT, 0o644)
-    except OSError:
-        yield
-        return
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX)
-        held.add(name)
-        yield
-    finally:
-        held.discard(name)
-        os.close(fd)   # releases the lock
-
-
-def compile_once(dispatcher, args: tuple, scene) -> None:
-    """Compile ``dispatcher`` for the types of ``args`` (or load it from the disk cache)
-    under ``scene``'s :func:`compile_lock`, unless this process has it already; the call
-    that follows runs outside the lock."""
-    sig = tuple(dispatcher.typeof_pyval(a) for a in args)
-    if sig in dispatcher.overloads:
-        return
-    load_numba_registries()
-    with compile_lock(scene):
-        dispatcher.compile(sig)

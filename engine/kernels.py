@@ -29,7 +29,8 @@ from .integrators.problem import (
     Problem,
     record_sample,
 )
-from .jit import compile_once, njit
+from .compiling import compile_once
+from .jit import njit
 from .observables import N_HIST, make_observer
 from .settings import Settings
 from .systems import make_system, probed

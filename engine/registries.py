@@ -22,7 +22,7 @@ def load_numba_registries() -> None:
     scipy.linalg when it is compiled, as before. Nothing changes in a kernel
     (tests/engine/test_registries.py).
 
-    Called where a kernel is first compiled or loaded (engine.jit.compile_once,
+    Called where a kernel is first compiled or loaded (engine.compiling.compile_once,
     engine.api.simulate, the analysis path, the fork server's preload); a process whose
     first compile goes elsewhere runs numba's probe, only slower. Under numba's compiler
     lock, as numba refreshes: no other thread compiles while the probe is swapped. numba

@@ -24,7 +24,7 @@ import numpy as np
 
 from engine import params as P
 from engine import status as S
-from engine.jit import compile_lock
+from engine.compiling import compile_lock
 from store.record import BlockRecord
 
 log = logging.getLogger("ditherlab")
@@ -219,7 +219,8 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     """Compile the block kernel of ``scene`` in this process; returns seconds. Once per
     machine: the first process to need a scene compiles it into the kernel cache
     (engine.jit) holding that scene's lock file there, and the others, waiting for the
-    lock, load it from the cache instead of compiling it again (engine.jit.compile_lock).
+    lock, load it from the cache instead of compiling it again (engine.compiling.compile_lock);
+    once it is there, warm-ups load it side by side, not one after another.
     Calls the engine directly, not compute_block: no ``$DITHERLAB_BLOCK_LOG`` line."""
     from engine.blocks import run_block
 
@@ -231,11 +232,11 @@ def warm_up(scene, p: np.ndarray, settings) -> float:
     # process at a point the spec-load check did not try (sweeps.workers.deaths)
     point = np.empty((0, 4)) if scene.digests and settings.device != "cuda" else \
         np.array([[0.1, 1000.0, 0.1, 0.1]])
-    with compile_lock(scene):
-        try:
+    try:   # (a failed warm-up leaves nothing ready: the next one takes the lock alone)
+        with compile_lock(scene, ready=f"warm-up {settings!r}"):
             run_block(scene, point, q, settings)
-        except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it
-            log.debug("warm-up failed: %s", exc)
+    except Exception as exc:  # noqa: BLE001 -- the sweep's own blocks report it
+        log.debug("warm-up failed: %s", exc)
     _COMPILED.add(scene)
     return time.perf_counter() - t0
 

@@ -102,7 +102,7 @@ def test_two_processes_compile_a_scene_once(tmp_path):
     """Two processes need one scene's kernel with an empty kernel cache, a sweep's warm-up
     and a direct engine.blocks.run_block, both started before either could compile (the
     test holds the scene's lock until both are ready): one compiles, the other loads the
-    kernel from the cache (engine.jit.compile_lock)."""
+    kernel from the cache (engine.compiling.compile_lock)."""
     env = {**os.environ, "DITHERLAB_CACHE_DIR": str(tmp_path / "cache")}
     script = tmp_path / "compile.py"
     script.write_text(COMPILE)
@@ -110,7 +110,7 @@ def test_two_processes_compile_a_scene_once(tmp_path):
         import json, sys
         from sweeps.planning.plan import make_plan
         from sweeps.spec import parse_spec
-        from engine.jit import compile_lock
+        from engine.compiling import compile_lock
         plan = make_plan(parse_spec(json.loads(sys.argv[1])))
         with compile_lock(plan.scene):
             print("held", flush=True)

@@ -81,7 +81,7 @@ def test_numba_compiles_on_the_deep_stack_in_any_thread():
 
     def call():
         assert twice(21) == 42           # from Python: _compile_for_args -> compile
-        twice.compile((numba.float64,))  # explicitly, as engine.jit.compile_once does
+        twice.compile((numba.float64,))  # explicitly, as engine.compiling.compile_once does
 
     with event.install_listener("numba:compile", Look()):
         thread = threading.Thread(target=call)
