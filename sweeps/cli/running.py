@@ -21,6 +21,11 @@ def _load(args):
 
 
 def cmd_submit(args) -> int:
+    from ..workers.local_start import PRESTART_MIN_WORKERS, prestart
+
+    if args.workers >= PRESTART_MIN_WORKERS and not (args.scheduler or args.cluster or
+                                                     args.detach):
+        prestart()   # the local workers' fork server imports while this process plans
     import store
 
     from ..estimates.time_history import record_run

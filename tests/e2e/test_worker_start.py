@@ -147,3 +147,58 @@ def test_a_folder_named_sweeps_in_the_current_directory_does_not_reach_the_worke
     assert out.returncode == 0, out.stderr[-3000:]
     ours, (theirs, forked) = json.loads(out.stdout.splitlines()[-1])
     assert "elsewhere" not in ours and theirs == ours and not forked
+
+
+PRESTARTED = """
+import json, multiprocessing.forkserver, os, sys
+from sweeps.workers import local_start
+
+
+def seen():
+    import os, sys
+    return {"forked": "sweeps.workers.preload" in sys.modules,
+            "env": {k: os.environ.get(k) for k in sorted(ENV)},
+            "hash": hash("ditherlab"), "parent": os.getppid()}
+
+
+ENV = ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_",
+       "PYTHONHASHSEED")
+
+if __name__ == "__main__":
+    if sys.argv[1] == "prestart":
+        local_start.prestart().join()
+        server = multiprocessing.forkserver._forkserver._forkserver_pid
+        assert "distributed" not in sys.modules   # (its import stays off that thread)
+    from sweeps.workers.cluster import dask_client
+    with dask_client(workers=2) as client:
+        workers = list(client.run(seen).values())
+    if sys.argv[1] == "prestart":
+        assert {w.pop("parent") for w in workers} == {server}, (workers, server)
+    else:
+        for w in workers:
+            w.pop("parent")
+    print(json.dumps(workers))
+"""
+
+
+def test_a_prestarted_fork_server_gives_the_workers_the_nannys_environment(tmp_path):
+    """``ditherlab submit --workers 4`` or more starts the fork server first thing
+    (local_start.prestart), before dask's nanny has put its pre-spawn environment into the
+    process: its workers are forked from that server and see what workers forked from a
+    server the nanny started see (OMP_NUM_THREADS=1, dask's hash seed 6640: the same
+    ``hash`` of a string)."""
+    script = tmp_path / "prestarted.py"
+    script.write_text(PRESTARTED)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHASHSEED", "OMP_NUM_THREADS")}
+    seen = {}
+    for how in ("prestart", "nanny"):
+        out = subprocess.run([sys.executable, str(script), how], capture_output=True,
+                             text=True, timeout=600, cwd=tmp_path, env=env)
+        assert out.returncode == 0, out.stderr[-3000:]
+        seen[how] = json.loads(out.stdout.splitlines()[-1])
+    assert seen["prestart"] == seen["nanny"], seen
+    first = seen["nanny"][0]
+    assert first["forked"] and first["env"]["OMP_NUM_THREADS"] == "1" and \
+        first["env"]["PYTHONHASHSEED"] == "6640", first
+    assert len({w["hash"] for w in seen["nanny"]}) == 1
+
