@@ -22,6 +22,7 @@ from engine.user_code import hook
 
 from ..spec.accuracy import Numerics, numerics
 from ..spec.grid import GridFacts, base_params
+from .blocks import balanced_blocks, interleaved_blocks
 from ..spec.methods import resolve_outputs
 from ..spec.models import Spec
 
@@ -47,9 +48,6 @@ ANALYSIS_POINT_S = 2e-6    # an averaged or harmonic-balance point (bench_analys
 W_SHARE = (0.02, 0.3)
 BLOCK_SECONDS = 1.0
 MIN_BLOCKS = 8
-# The blocks a sweep's dispatch takes last are smaller (balanced_blocks): the work of its
-# last TAIL_BLOCKS blocks in halves and quarters, so that 16-32 workers end together
-TAIL_BLOCKS = 32
 # Tasks per second one submitting process hands out and takes back: dask's scheduler and
 # client, the journal and the cube cost it 4.9 ms of CPU a task with 65 in flight, 9.3 ms
 # with 1000 workers in every task's restriction (scripts/bench_scale.py, docs/BATCH.md),
@@ -139,54 +137,6 @@ def _scene(spec: Spec, p: np.ndarray, integrator: str, outputs) -> Scene:
                              sizes=spec.model_sizes)
 
 
-def interleaved_blocks(n_points: int, n_blocks: int) -> list[np.ndarray]:
-    """Block b holds flat indices b, b + n_blocks, ...: cost that varies smoothly across
-    the grid (e.g. with omega) is spread evenly over the blocks, so no core idles."""
-    return [np.arange(b, n_points, n_blocks) for b in range(n_blocks)]
-
-
-def balanced_blocks(cost: np.ndarray, n_blocks: int) -> list[np.ndarray]:
-    """Points into ``n_blocks`` blocks of nearly equal total ``cost`` (largest first onto
-    the emptiest block so far), each block's indices sorted; the costliest blocks come
-    first, so the dispatch starts the long work early and the workers finish together.
-    With TAIL_BLOCKS x 3 blocks or more, the work of the last TAIL_BLOCKS goes into
-    blocks of half and a quarter of the size (:func:`block_shares`), which the dispatch
-    takes last: where each worker's last block started is where it idles until the last
-    one ends. Fig. 14's measured point costs, list-scheduled on 16 workers: a points
-    phase at 0.953 of its ideal with equal blocks, 0.989 with this tail (scripts/...).
-    (The greedy loop is Python's, but it keeps one block number per point in an int32
-    array: at 10^6 points 4 MB, where lists of Python ints took 40 MB; 1.1 s, was 1.9.)"""
-    import heapq
-
-    share = block_shares(n_blocks)
-    heap = [(0.0, b) for b in range(share.size)]
-    totals = np.zeros(share.size)
-    order = np.argsort(-cost, kind="stable")
-    owner = np.empty(cost.size, np.int32)
-    for start in range(0, cost.size, 1 << 16):   # Python numbers for a slice at a time
-        part = order[start:start + (1 << 16)]
-        for i, c in zip(part.tolist(), cost[part].tolist()):
-            _, b = heapq.heappop(heap)
-            owner[i] = b
-            totals[b] += c
-            heapq.heappush(heap, (totals[b] / share[b], b))
-    members = np.argsort(owner, kind="stable")     # block by block, indices ascending
-    bounds = np.cumsum(np.bincount(owner, minlength=share.size))
-    blocks = np.split(members.astype(np.int64), bounds[:-1])
-    return [blocks[b] for b in sorted(range(share.size), key=lambda b: -totals[b])
-            if blocks[b].size]
-
-
-def block_shares(n_blocks: int) -> np.ndarray:
-    """Each block's share of the work, in units of an even ``1 / n_blocks`` share: all 1,
-    or with TAIL_BLOCKS x 3 blocks or more the last TAIL_BLOCKS units each cut in a half and two
-    quarters (more blocks in all)."""
-    if n_blocks < 3 * TAIL_BLOCKS:
-        return np.ones(n_blocks)
-    return np.concatenate([np.ones(n_blocks - TAIL_BLOCKS), np.full(TAIL_BLOCKS, 0.5),
-                           np.full(2 * TAIL_BLOCKS, 0.25)])
-
-
 def point_costs(spec: Spec, coords: dict[str, np.ndarray],
                 index: np.ndarray | None = None) -> np.ndarray:
     """Relative cost per grid point (C order; at the flat indices ``index`` only, if
@@ -220,8 +170,8 @@ def level_price(num: Numerics) -> float:
 def work_s(plan: Plan, index: np.ndarray, num: Numerics | None = None) -> float:
     """Rough serial seconds of the points at flat indices ``index`` at ``num`` (the plan's
     own numerics by default): their relative costs x t_end x SECONDS_PER_RADIAN x the
-    level's price (the dither's amplitude included: :func:`point_costs`). Fitted to Fig. 14 (standard); it over-prices dithered LuGre points by 20-45x and prices
-    undithered ones about right (1 ms a draft point of 100 tau), so it errs towards a
+    level's price (the dither's amplitude included: :func:`point_costs`). Fitted to Fig. 14
+    (standard); it over-prices dithered LuGre points by 20-45x and prices undithered ones about right (1 ms a draft point of 100 tau), so it errs towards a
     cluster. The analysis paths are priced at ANALYSIS_POINT_S a point."""
     index = np.asarray(index, np.int64)
     if plan.path != "simulate":

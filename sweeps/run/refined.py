@@ -23,7 +23,8 @@ from engine import status as S
 
 from ..workers.threads import ThreadClient
 from .dispatch import run_blocks
-from ..planning.plan import Plan, balanced_blocks
+from ..planning.blocks import balanced_blocks
+from ..planning.plan import Plan
 from ..planning.refine import CLASS_OUTPUT, MARGIN_OUTPUT, Refinement
 from ..estimates.error_reruns import ESTIMATE_FILE, SampleRuns, estimate_into, needs_estimate
 

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from sweeps.planning.plan import BLOCK_SECONDS, TAIL_BLOCKS, make_plan, work_s
+from sweeps.planning.blocks import TAIL_BLOCKS
+from sweeps.planning.plan import BLOCK_SECONDS, make_plan, work_s
 from sweeps.spec import load_spec, parse_spec
 
 FIG14 = Path(__file__).resolve().parents[3] / "specs" / "fig14.toml"
