@@ -22,9 +22,9 @@ from engine.user_code import hook
 
 from ..spec.accuracy import Numerics, numerics
 from ..spec.grid import GridFacts, base_params
-from .blocks import balanced_blocks, interleaved_blocks
 from ..spec.methods import resolve_outputs
 from ..spec.models import Spec
+from .blocks import balanced_blocks, interleaved_blocks
 
 # Points per block when the spec does not say: about MIN_BLOCKS blocks, clamped to
 # [lo, hi] points. Each block costs ~7 ms of scheduling and journaling beside its compute
@@ -171,8 +171,9 @@ def work_s(plan: Plan, index: np.ndarray, num: Numerics | None = None) -> float:
     """Rough serial seconds of the points at flat indices ``index`` at ``num`` (the plan's
     own numerics by default): their relative costs x t_end x SECONDS_PER_RADIAN x the
     level's price (the dither's amplitude included: :func:`point_costs`). Fitted to Fig. 14
-    (standard); it over-prices dithered LuGre points by 20-45x and prices undithered ones about right (1 ms a draft point of 100 tau), so it errs towards a
-    cluster. The analysis paths are priced at ANALYSIS_POINT_S a point."""
+    (standard); it over-prices dithered LuGre points by 20-45x and prices undithered ones
+    about right (1 ms a draft point of 100 tau), so it errs towards a cluster. The
+    analysis paths are priced at ANALYSIS_POINT_S a point."""
     index = np.asarray(index, np.int64)
     if plan.path != "simulate":
         return ANALYSIS_POINT_S * index.size
@@ -203,9 +204,11 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
         n_blocks = math.ceil(n / GPU_BLOCK_POINTS)   # one launch fills the GPU
     elif spec.method == "simulate" and not spec.block_size:
         # about BLOCK_SECONDS a block, but never fewer than lo points: the price per radian
-        # is Fig. 14's at standard, ~70x a draft LuGre point's, and a dask task costs 10-25
-        # ms here (scripts/bench_sweep.py, quiet: 1000 draft LuGre points in 409 blocks of
-        # 14 ms lost 150 % to dask on 2 workers, in 63 blocks of 16 points 50 %)
+        # is Fig. 14's at standard, ~70x a draft LuGre point's. A dask task costs 10-25 ms
+        # here, but cheap blocks go several to a task (blocks_per_task): 1,000 draft LuGre
+        # points lost 5.3-6.1 % to dask in 195 blocks, 5.0-6.5 % in 63 (scripts/
+        # bench_sweep.py, 2026-11-30), where one block a task had lost 150 % in 409 blocks.
+        # At least 16 points made Fig. 14 61 blocks: too few for 16 workers (blocks.py)
         seconds = costs.sum() * spec.time.t_end * SECONDS_PER_RADIAN
         n_blocks = min(n, max(n_blocks, min(math.ceil(seconds / BLOCK_SECONDS),
                                             math.ceil(n / lo))))
