@@ -9,11 +9,11 @@ loses at most the blocks in flight; the cube is republished every few blocks and
 end. A resubmitted spec computes only the blocks missing from the journal.
 
 The pieces: where blocks are computed (sweeps.workers.compute.Compute), the worker's task
-(sweeps.workers.task), what a run starts from (sweeps.run.preparation), the empty cube of
-a plan (sweeps.run.new_cube), the sink of finished blocks (sweeps.run.sink), their
-dispatch (sweeps.run.dispatch, sweeps.run.local), the error estimate
-(sweeps.estimates.error_reruns) and how a run ends (sweeps.run.outcome). This module holds
-:func:`submit`, which puts them together in named steps (:class:`Submission`).
+(sweeps.workers.task), what a run starts from (sweeps.run.preparation), the empty cube of a
+plan (sweeps.run.new_cube), the sink of finished blocks (sweeps.run.sink), their dispatch
+(sweeps.run.dispatch, .local, .head_start), the error estimate (sweeps.estimates.error_reruns)
+and how a run ends (sweeps.run.outcome). :func:`submit` puts them together in named steps
+(:class:`Submission`).
 """
 from __future__ import annotations
 
@@ -29,6 +29,7 @@ from ..workers import task
 from ..workers.compute import LOCAL, SCHEDULER, Compute
 from .new_cube import empty_cube
 from .dispatch import run_blocks
+from .head_start import head_start
 from .local import run_blocks_local
 from .lease_holder import LEASE_LOST
 from .outcome import SubmitResult, abort, attached_result, final_result
@@ -236,10 +237,11 @@ class Submission:
                    warm_up=warm, **extra)
 
     def connect(self) -> bool:
-        """The cluster's client: an early start's, once its workers are warm, or made now
-        (``cluster_s`` the wait); False if the run was stopped meanwhile."""
+        """The cluster's client: an early start's once warm (meanwhile blocks run here:
+        sweeps.run.head_start), or made now (``cluster_s`` the wait); False if stopped."""
         t, c = time.perf_counter(), self.compute
         if c.early:
+            self.todo = head_start(self.plan, self.todo, self.sink, c, self.shown)
             compiling = self.progress.compiling()
             client = c.wait(self.sink.should_stop, compiling, starting=self.shown)
             compiling.close()
@@ -288,10 +290,9 @@ class Submission:
 
 
 def small(plan: Plan, todo: list[int], threads: int) -> bool:
-    """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: blocks to
-    compute, the error sample's re-runs) over ``threads`` is below IN_PROCESS_BELOW_S, the
-    cost of a local cluster's start: it runs on threads here (sweeps.run.local). Not a
-    refined sweep (its later levels are unknown)."""
+    """A simulated sweep whose estimated work (sweeps.planning.plan.work_s: blocks, the error
+    sample's re-runs) over ``threads`` is below IN_PROCESS_BELOW_S, a local cluster's start:
+    it runs on threads here (sweeps.run.local); not a refined sweep (its levels unknown)."""
     if plan.spec.refine:
         return False
     index = np.concatenate([plan.blocks[b] for b in todo]) if todo else np.arange(0)

@@ -145,6 +145,15 @@ class EarlyStart:
             raise self._error
         return self._client
 
+    def ready(self) -> bool:
+        """The cluster is up and its workers warm, or its start failed (:meth:`client`
+        says which), without waiting. Once the workers are up, Ctrl-C is given back here
+        too, as :meth:`client` does (sweeps.run.head_start asks this while the workers
+        warm up, which a first compile makes a minute)."""
+        if self._up.is_set() and threading.current_thread() is threading.main_thread():
+            self._restore_sigint()
+        return self._up.is_set() and not self._thread.is_alive()
+
     def close_later(self) -> None:
         """Close the cluster on a thread, so the caller reports its result first; the
         process waits for it at its exit, ignoring Ctrl-C meanwhile (:func:`_wait_for_stops`:

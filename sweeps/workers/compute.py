@@ -140,6 +140,10 @@ class Compute:
         self._client = self._early.client(should_stop, notice, starting)
         return self._client
 
+    def early_ready(self) -> bool:
+        """An early start's cluster is up and warm (or failed): :meth:`wait` returns at once."""
+        return self._early is not None and self._early.ready()
+
     @property
     def early(self) -> bool:
         """The cluster was started by :meth:`start_early` (its workers are warm)."""

@@ -83,6 +83,14 @@ def prestart() -> threading.Thread:
     return thread
 
 
+def usable_cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # (not on every platform)
+        return os.cpu_count() or 1
+
+
 def _pre_spawn_environment() -> dict[str, str]:
     """What dask's nanny puts into this process's environment before it starts a worker:
     ``distributed.nanny.pre-spawn-environ``, a value already set here winning, and

@@ -199,3 +199,48 @@ def test_a_kill_while_reruns_run_among_the_blocks_leaves_a_resumable_sweep(
     a = _results(crashed / spec.sweep_id / "cube.nc")
     b = _results(clean / spec.sweep_id / "cube.nc")
     assert [k for k in a if a[k] != b[k]] == []
+
+
+@pytest.mark.long
+def test_blocks_computed_here_while_4_workers_start_give_the_clusters_cube(tmp_path,
+                                                                           monkeypatch):
+    """``Compute(workers=4)``: while the cluster starts, this process computes the
+    smallest blocks on its own threads (sweeps.run.head_start), the cluster the rest. The
+    cluster is held as not ready until two blocks were computed here (the head start's
+    view of it: no race), then taken; the cube is bit for bit the one a 2-worker cluster
+    writes alone, and every block was computed once."""
+    from sweeps.run import head_start
+    from sweeps.workers import local_start, task
+    from sweeps.workers.compute import Compute
+
+    monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)   # a cluster, not threads
+    monkeypatch.setattr(local_start, "usable_cores", lambda: 3)   # 2 threads here
+    here = []
+    compute_block = task.compute_block
+
+    def counted(*args, **kw):   # (this process's calls: the workers are other processes)
+        here.append(tuple(args[4].tolist()))
+        return compute_block(*args, **kw)
+
+    monkeypatch.setattr(task, "compute_block", counted)
+    ready = Compute.early_ready
+    monkeypatch.setattr(Compute, "early_ready", lambda self: ready(self) and len(here) >= 2)
+    log = tmp_path / "blocks.log"
+    monkeypatch.setenv(task.BLOCK_LOG_ENV, str(log))
+    plan = make_plan(parse_spec(SPEC))
+    ours = submit(plan, tmp_path / "four", Compute(workers=4), progress=False)
+    assert "head_start_s" in ours.timings and len(here) >= 2, (ours.timings, here)
+    assert {tuple(b.tolist()) for b in plan.blocks} >= set(here)
+    keys = [line.split()[1] for line in log.read_text().splitlines()]
+    blocks = {block_key(plan.scene, plan.block_points(b), plan.numerics.settings)
+              for b in range(len(plan.blocks))}
+    computed = [k for k in keys if k in blocks]
+    assert sorted(computed) == sorted(blocks), "a block computed twice, or not at all"
+    monkeypatch.setattr(task, "compute_block", compute_block)
+    monkeypatch.delenv(task.BLOCK_LOG_ENV)
+    alone = submit(make_plan(parse_spec(SPEC)), tmp_path / "two", Compute(workers=2),
+                   progress=False)
+    assert "head_start_s" not in alone.timings
+    assert ours.state == alone.state == "done"
+    a, b = _results(ours.cube_path), _results(alone.cube_path)
+    assert [k for k in a if a[k] != b[k]] == []
