@@ -15,11 +15,13 @@ def interleaved_blocks(n_points: int, n_blocks: int) -> list[np.ndarray]:
     return [np.arange(b, n_points, n_blocks) for b in range(n_blocks)]
 
 
-def balanced_blocks(cost: np.ndarray, n_blocks: int) -> list[np.ndarray]:
+def balanced_blocks(cost: np.ndarray, n_blocks: int, size: int | None = None
+                    ) -> list[np.ndarray]:
     """Points into ``n_blocks`` blocks of nearly equal total ``cost`` (largest first onto
-    the emptiest block so far), each block's indices sorted; the costliest blocks come
-    first, so the dispatch starts the long work early and the workers finish together.
-    With TAIL_BLOCKS x 3 blocks or more, the work of the last TAIL_BLOCKS goes into
+    the emptiest block so far; with ``size``, the spec's ``block_size``, onto the emptiest
+    of those with fewer than ``size`` points), each block's indices sorted; the costliest
+    blocks come first, so the dispatch starts the long work early and the workers finish
+    together. Without ``size`` and with TAIL_BLOCKS x 3 blocks or more, the work of the last TAIL_BLOCKS goes into
     blocks of half and a quarter of the size (:func:`block_shares`), which the dispatch
     takes last: a worker done before the others waits for the last block of all, and a
     small last block is a short wait. Fig. 14's measured point costs list-scheduled on 16
@@ -29,9 +31,10 @@ def balanced_blocks(cost: np.ndarray, n_blocks: int) -> list[np.ndarray]:
     array: at 10^6 points 4 MB, where lists of Python ints took 40 MB; 1.1 s, was 1.9.)"""
     import heapq
 
-    share = block_shares(n_blocks).tolist()
+    share = (block_shares(n_blocks) if size is None else np.ones(n_blocks)).tolist()
     heap = [(0.0, b) for b in range(len(share))]
-    totals = [0.0] * len(share)
+    totals, counts = [0.0] * len(share), [0] * len(share)
+    room = cost.size if size is None else size
     order = np.argsort(-cost, kind="stable")
     owner = np.empty(cost.size, np.int32)
     for start in range(0, cost.size, 1 << 16):   # Python numbers for a slice at a time
@@ -40,7 +43,9 @@ def balanced_blocks(cost: np.ndarray, n_blocks: int) -> list[np.ndarray]:
             _, b = heapq.heappop(heap)
             owner[i] = b
             totals[b] += c
-            heapq.heappush(heap, (totals[b] / share[b], b))   # the emptiest for its share
+            counts[b] += 1
+            if counts[b] < room:   # (a full block takes no more)
+                heapq.heappush(heap, (totals[b] / share[b], b))   # the emptiest for its share
     members = np.argsort(owner, kind="stable")     # block by block, indices ascending
     bounds = np.cumsum(np.bincount(owner, minlength=len(share)))
     blocks = np.split(members.astype(np.int64), bounds[:-1])

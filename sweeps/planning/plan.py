@@ -215,7 +215,7 @@ def make_plan(spec: Spec, level: str | None = None) -> Plan:
     if spec.refine:
         blocks = []   # known level by level (sweeps.run.refined)
     elif spec.method == "simulate":
-        blocks = balanced_blocks(costs, n_blocks)
+        blocks = balanced_blocks(costs, n_blocks, spec.block_size)
     else:
         blocks = interleaved_blocks(n, n_blocks)
     return Plan(spec=spec, sweep_id=spec.sweep_id, path=spec.method, scene=scene, params=p,

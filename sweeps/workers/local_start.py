@@ -91,12 +91,40 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
+def _distributed_defaults() -> None:
+    """distributed's configuration defaults (its ``distributed.yaml``: the nanny's
+    pre-spawn environment among them) in dask's configuration, as ``import distributed``
+    puts them there, without that import (0.4 s, not on prestart's thread). Without them
+    prestart saw no pre-spawn environment: it did not set it, and where this process had
+    inherited some of it (a parent that had run a cluster) it took that for the workers'
+    own environment, and the cluster's start, with the defaults, then spawned its workers
+    instead of forking them (a CI run)."""
+    import importlib.util
+
+    import dask
+    import yaml
+
+    if "distributed.config" in sys.modules or _LOADED:
+        return
+    spec = importlib.util.find_spec("distributed")
+    if spec is None or not spec.submodule_search_locations:
+        return
+    path = os.path.join(list(spec.submodule_search_locations)[0], "distributed.yaml")
+    with open(path) as f:
+        dask.config.update_defaults(yaml.safe_load(f))   # (what distributed.config does)
+    _LOADED.append(path)
+
+
+_LOADED: list[str] = []   # distributed.yaml once loaded by _distributed_defaults
+
+
 def _pre_spawn_environment() -> dict[str, str]:
     """What dask's nanny puts into this process's environment before it starts a worker:
     ``distributed.nanny.pre-spawn-environ``, a value already set here winning, and
     PYTHONHASHSEED 6640 unless that lists another (distributed.nanny.Nanny.__init__)."""
     import dask
 
+    _distributed_defaults()
     env = {k: os.environ.get(k, str(v))
            for k, v in (dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {}).items()
            if v is not None}
@@ -157,6 +185,8 @@ def local_settings(dashboard: str | None = None):
 def _environment() -> tuple:
     """The environment a worker would start with, less what dask's nanny sets itself."""
     import dask
+
+    _distributed_defaults()
 
     nanny_sets = set(dask.config.get("distributed.nanny.pre-spawn-environ", {}) or {})
     return tuple(sorted((k, v) for k, v in os.environ.items()

@@ -181,15 +181,23 @@ if __name__ == "__main__":
 """
 
 
-def test_a_prestarted_fork_server_gives_the_workers_the_nannys_environment(tmp_path):
+@pytest.mark.parametrize("inherited", [{}, {"MKL_NUM_THREADS": "1", "PYTHONHASHSEED": "6640"}])
+def test_a_prestarted_fork_server_gives_the_workers_the_nannys_environment(tmp_path,
+                                                                         inherited):
     """``ditherlab submit --workers 4`` or more starts the fork server first thing
     (local_start.prestart), before dask's nanny has put its pre-spawn environment into the
     process: its workers are forked from that server and see what workers forked from a
     server the nanny started see (OMP_NUM_THREADS=1, dask's hash seed 6640: the same
-    ``hash`` of a string)."""
+    ``hash`` of a string). Also in a process that inherited part of that environment from
+    a parent that ran a cluster (a CI run's test process): prestart, which does not import
+    distributed, once read no pre-spawn environment, took the inherited part for the
+    workers' own, and the cluster then spawned its workers instead."""
     script = tmp_path / "prestarted.py"
     script.write_text(PRESTARTED)
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHASHSEED", "OMP_NUM_THREADS")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("PYTHONHASHSEED", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                        "OPENBLAS_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_")}
+    env.update(inherited)
     seen = {}
     for how in ("prestart", "nanny"):
         out = subprocess.run([sys.executable, str(script), how], capture_output=True,

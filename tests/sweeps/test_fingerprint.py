@@ -139,11 +139,13 @@ store.lease store.netcdf_write store.points store.record
 sweeps sweeps.errors sweeps.version
 sweeps.spec sweeps.spec.accuracy sweeps.spec.grid sweeps.spec.messages sweeps.spec.methods
 sweeps.spec.model_params sweeps.spec.models
-sweeps.planning sweeps.planning.lattice sweeps.planning.plan sweeps.planning.refine
+sweeps.planning sweeps.planning.blocks sweeps.planning.lattice sweeps.planning.plan
+sweeps.planning.refine
 sweeps.workers sweeps.workers.cluster sweeps.workers.compute sweeps.workers.deaths
 sweeps.workers.matching sweeps.workers.local_start sweeps.workers.task sweeps.workers.threads
 sweeps.estimates sweeps.estimates.error_estimate sweeps.estimates.error_reruns
-sweeps.run sweeps.run.dispatch sweeps.run.interrupt sweeps.run.lease_holder sweeps.run.local
+sweeps.run sweeps.run.dispatch sweeps.run.head_start sweeps.run.interrupt sweeps.run.lease_holder
+sweeps.run.local
 sweeps.run.new_cube sweeps.run.order sweeps.run.outcome sweeps.run.preparation sweeps.run.quiet
 sweeps.run.refined sweeps.run.sink sweeps.run.submit
 """.split()
