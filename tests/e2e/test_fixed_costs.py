@@ -244,3 +244,51 @@ def test_blocks_computed_here_while_4_workers_start_give_the_clusters_cube(tmp_p
     assert ours.state == alone.state == "done"
     a, b = _results(ours.cube_path), _results(alone.cube_path)
     assert [k for k in a if a[k] != b[k]] == []
+
+
+@pytest.mark.long
+def test_ctrl_c_while_blocks_run_here_keeps_them_and_the_sweep_resumes(tmp_path, monkeypatch):
+    """A Ctrl-C while this process computes blocks for a cluster that is still starting
+    (sweeps.run.head_start): the blocks finished here are kept (journaled), the run ends
+    as cancelled, the cluster stops, and the next submit computes only the others; its
+    cube equals a clean run's. The cluster is held as not ready, and the Ctrl-C comes at
+    the head start's next look after two blocks were computed here (no race)."""
+    from sweeps.run import head_start
+    from sweeps.workers import local_start, task
+    from sweeps.workers.compute import Compute
+
+    monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
+    monkeypatch.setattr(local_start, "usable_cores", lambda: 3)   # 2 threads here
+    here = []
+    compute_block = task.compute_block
+
+    def counted(*args, **kw):
+        here.append(1)
+        return compute_block(*args, **kw)
+
+    plan = make_plan(parse_spec(SPEC))
+    journal = store.Journal(tmp_path / "stopped" / plan.sweep_id / "journal")
+
+    def ctrl_c():
+        if len(journal.files()) >= 2:   # two blocks computed here and journaled
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(task, "compute_block", counted)
+    monkeypatch.setattr(Compute, "early_ready", lambda self: False)   # still starting
+    monkeypatch.setattr(head_start.interrupt, "check", ctrl_c)
+    with pytest.raises(KeyboardInterrupt):
+        submit(plan, tmp_path / "stopped", Compute(workers=4), progress=False)
+    wait_for_stops()   # (the cluster, closed on the way out)
+    # every block computed here but one still running at the Ctrl-C is kept (as anywhere,
+    # a Ctrl-C loses at most the blocks in flight)
+    kept = journal.done(plan.blocks)
+    assert 2 <= len(kept) <= len(here) <= len(kept) + 2, (kept, here)
+    row = store.Catalogue(tmp_path / "stopped").get(plan.sweep_id)
+    assert row["state"] == "cancelled", row
+    monkeypatch.undo()
+    monkeypatch.setattr(submit_module, "IN_PROCESS_BELOW_S", 0.0)
+    resumed = submit(make_plan(parse_spec(SPEC)), tmp_path / "stopped", progress=False)
+    assert resumed.blocks_run == len(plan.blocks) - len(kept), resumed
+    clean = submit(make_plan(parse_spec(SPEC)), tmp_path / "clean", progress=False)
+    a, b = _results(resumed.cube_path), _results(clean.cube_path)
+    assert [k for k in a if a[k] != b[k]] == []
