@@ -4,10 +4,13 @@ under it (:func:`compile_once`)."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import hashlib
 import os
 import threading
 from pathlib import Path
+
+import numba
 
 from .jit import cache_dir
 from .registries import load_numba_registries
@@ -47,7 +50,7 @@ def compile_lock(scene, ready: str | None = None):
         yield
         return
     done = None if ready is None else \
-        folder / f"{name}-{hashlib.sha1(ready.encode()).hexdigest()[:16]}.ready"
+        folder / f"{name}-{hashlib.sha1((ready + _target()).encode()).hexdigest()[:16]}.ready"
     try:
         shared = _take(fd, done)
         held.add(name)
@@ -58,6 +61,17 @@ def compile_lock(scene, ready: str | None = None):
     finally:
         held.discard(name)
         os.close(fd)   # releases the lock
+
+
+@functools.cache
+def _target() -> str:
+    """numba's version and the machine code's target (CPU name and features: numba's cache
+    index keys its entries by them), so that a cache folder shared by machines of other
+    CPUs, or kept across a numba upgrade, promises nothing it has not got: there a holder
+    compiles alone, as the first did."""
+    from numba.core.registry import cpu_target
+
+    return f"{numba.__version__} {cpu_target.target_context.codegen().magic_tuple()}"
 
 
 def _take(fd: int, done: Path | None) -> bool:

@@ -114,6 +114,7 @@ def main() -> None:
     ap.add_argument("--baseline", help="a checkout of other code: its blocks projected too")
     ap.add_argument("--rerun-seconds", help=argparse.SUPPRESS)   # (the child: JSON)
     args = ap.parse_args()
+    args.cube = str(Path(args.cube).resolve())   # (the baseline's child runs elsewhere)
     workers = [int(w) for w in args.workers.split(",")]
     if args.rerun_seconds is not None:   # the baseline's child
         print(json.dumps(project(args.cube, workers, json.loads(args.rerun_seconds))))

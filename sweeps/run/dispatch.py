@@ -63,9 +63,12 @@ def run_blocks(plan: Plan, todo: list[int], sink: BlockSink, compute, *, progres
 
 def finish_estimate(plan: Plan, client, todo, sink: BlockSink, sample, progress) -> None:
     """The error estimate once the points are done (its re-runs ``sample``, if given,
-    already dispatched among the blocks); a stopped run's re-runs are cancelled."""
+    already dispatched among the blocks); a stopped run's re-runs are cancelled. Made
+    again when this run computed blocks: ``todo`` here, or before the cluster was up
+    (``sink.blocks_run``: sweeps.run.head_start may have taken them all)."""
+    ran = bool(todo) or sink.blocks_run > 0
     if sink.stopped is None and (needs_estimate(plan, sink.sweep, sink.cube) or
-                                 (todo and plan.path == "simulate" and complete(sink.cube))):
+                                 (ran and plan.path == "simulate" and complete(sink.cube))):
         estimate_into(plan, client, sink.cube, sink.sweep, sink.timings, started=sample,
                       display=progress.display(plan))
     elif sample is not None:

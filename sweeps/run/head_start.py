@@ -18,7 +18,7 @@ import threading
 import time
 
 from ..planning.plan import Plan, work_s
-from ..workers import task
+from ..workers.task import compute_block, warm_up
 from ..workers.compute import LOCAL
 from ..workers.local_start import PRESTART_MIN_WORKERS
 from ..workers.threads import ThreadClient
@@ -83,7 +83,7 @@ def _smallest_first(pool: ThreadClient, plan: Plan, queue: list[int], until) -> 
         interrupt.check()
         while queue and len(inflight) < pool.threads and not until.should_stop():
             b = queue.pop()
-            inflight[pool.submit(task.compute_block, plan.scene, plan.block_points(b),
+            inflight[pool.submit(compute_block, plan.scene, plan.block_points(b),
                                  plan.params, plan.numerics.settings, plan.blocks[b])] = b
         if not inflight:
             return
@@ -97,7 +97,7 @@ def _smallest_first(pool: ThreadClient, plan: Plan, queue: list[int], until) -> 
 def _kernel_here(plan: Plan, give_up, keep_alive) -> bool:
     """Load (or compile) the block kernel in this process on a daemon thread; False if
     ``give_up()`` turns true first (it is left to finish behind)."""
-    thread = threading.Thread(target=task.warm_up, daemon=True, name="ditherlab-head-warm",
+    thread = threading.Thread(target=warm_up, daemon=True, name="ditherlab-head-warm",
                               args=(plan.scene, plan.params, plan.numerics.settings))
     thread.start()
     while thread.is_alive():

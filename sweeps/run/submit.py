@@ -219,8 +219,7 @@ class Submission:
             return
         extra = {}
         if self.whole and self.todo and overlaps_estimate(plan, self.sweep):
-            # the error sample's re-runs among the blocks, longest first (its sample is
-            # drawn from the sweep id): no tail of re-runs after the last block
+            # the error sample's re-runs among the blocks (known from the sweep id): no tail
             extra["sample"] = SampleRuns(plan)
         warm = not self.compute.early   # an early start's workers are warm
         if not self.here and not self.connect():
@@ -242,6 +241,7 @@ class Submission:
         t, c = time.perf_counter(), self.compute
         if c.early:
             self.todo = head_start(self.plan, self.todo, self.sink, c, self.shown)
+            t = time.perf_counter()   # (cluster_s: the wait for the cluster alone)
             compiling = self.progress.compiling()
             client = c.wait(self.sink.should_stop, compiling, starting=self.shown)
             compiling.close()

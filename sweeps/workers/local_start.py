@@ -24,7 +24,7 @@ PRELOAD = "sweeps.workers.preload"   # what the fork server imports before it fo
 # running test: not part of what a worker is started with (start_method)
 _VOLATILE = {"PYTEST_CURRENT_TEST", "PYTHONHASHSEED", "__DASK_PARENT_PID"}
 _forked_from: tuple | None = None   # (environment, sys.path) the fork server started with
-_DECIDING = threading.Lock()
+_DECIDING = threading.RLock()
 
 
 def start_method() -> str:
@@ -51,7 +51,7 @@ def start_method() -> str:
         if "forkserver" not in multiprocessing.get_all_start_methods() or \
                 not _server_imports_ours():
             return "spawn"
-        now = (_environment(), tuple(sys.path))
+        now = (_environment(), _import_path())
         if _forked_from is None:
             _forked_from = now
             multiprocessing.get_context("forkserver").set_forkserver_preload([PRELOAD])
@@ -74,9 +74,11 @@ def prestart() -> threading.Thread:
     def start() -> None:
         import multiprocessing.forkserver
 
-        if start_method() == "forkserver":
+        with _DECIDING:   # (the environment is read under it: _environment)
+            if start_method() != "forkserver":
+                return
             os.environ.update(_pre_spawn_environment())
-            multiprocessing.forkserver.ensure_running()
+        multiprocessing.forkserver.ensure_running()
 
     thread = threading.Thread(target=start, daemon=True, name="ditherlab-fork-server")
     thread.start()
@@ -180,6 +182,15 @@ def local_settings(dashboard: str | None = None):
         del quiet["distributed.worker.profile.enabled"]
     return dask.config.set({"distributed.worker.multiprocessing-method": start_method(),
                             **quiet})
+
+
+def _import_path() -> tuple:
+    """``sys.path`` as the workers need it, less the current directory: the fork server
+    (``python -c`` here) imports from it first whatever this process's path says, and the
+    spec load appends it for a brought model found there (engine.user_code): counted, it
+    made a prestarted server's workers spawned ones (a review found it)."""
+    here = os.getcwd()
+    return tuple(p for p in sys.path if os.path.abspath(p or ".") != here)
 
 
 def _environment() -> tuple:

@@ -210,3 +210,22 @@ def test_a_prestarted_fork_server_gives_the_workers_the_nannys_environment(tmp_p
         first["env"]["PYTHONHASHSEED"] == "6640", first
     assert len({w["hash"] for w in seen["nanny"]}) == 1
 
+
+
+def test_the_current_folder_joining_sys_path_keeps_the_fork_server(tmp_path):
+    """The spec load appends the current folder to ``sys.path`` for a brought model found
+    there (engine.user_code), after prestart has decided on the fork server: that server
+    (``python -c`` in this folder) imports from it first anyway, so its workers stay
+    forked (a review found them spawned). Another folder joining still means spawned
+    workers: the server would not import from it."""
+    script = ("import os, sys\n"
+              "from sweeps.workers import local_start as ls\n"
+              "a = ls.start_method()\n"
+              "sys.path.append(os.getcwd())\n"
+              "b = ls.start_method()\n"
+              "sys.path.append(os.path.join(os.getcwd(), 'elsewhere'))\n"
+              "print(a, b, ls.start_method())\n")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert out.stdout.split() == ["forkserver", "forkserver", "spawn"], out.stdout

@@ -1,7 +1,7 @@
 """sweeps.run.head_start: blocks computed on threads of the submitter while its local
 cluster starts (issue 37). Here the rules, with the real kernels and a cluster whose
 readiness the test decides (no race to win or lose); a real submit with 4 workers:
-tests/e2e/test_head_start.py."""
+tests/e2e/test_fixed_costs.py."""
 from __future__ import annotations
 
 import threading
