@@ -16,12 +16,10 @@ from sweeps.spec import parse_spec
 from sweeps.workers import local_start, task
 from sweeps.workers.compute import LOCAL
 
+from .test_fixed_costs import SPEC as FIXED_COSTS_SPEC
+
 EXAMPLES = Path(__file__).resolve().parents[3] / "docs" / "examples"
-SPEC = {"name": "head-start", "friction": "lugre", "dither": "square-velocity",
-        "method": "simulate", "outputs": ["v_mean", "F_mean"], "accuracy": "draft",
-        "block_size": 2, "time": {"t_end": 6.0, "t_transient": 2.0},
-        "grid": {"W": [0.1, 0.3, 0.5, 0.7], "omega": [100.0, 300.0, 1000.0, 3000.0],
-                 "v_ref": [0.4], "v_d": [0.1]}}
+SPEC = {**FIXED_COSTS_SPEC, "name": "head-start"}   # 16 points in 8 blocks of 2
 
 
 class _Compute:
