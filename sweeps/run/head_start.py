@@ -68,7 +68,7 @@ def head_start(plan: Plan, todo: list[int], sink, compute, keep_alive=lambda: No
     with ThreadClient(threads, name="ditherlab-head") as pool:
         _smallest_first(pool, plan, offered, until)
     sink.timings["head_start_s"] = time.perf_counter() - t0
-    log.debug("%d of %d blocks computed here while the cluster started (%d threads)",
+    log.debug("%d of %d blocks computed here while the cluster started (threads: %d)",
               len(until.got), len(todo), threads)
     return [b for b in todo if b not in until.got]
 
