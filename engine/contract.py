@@ -151,8 +151,9 @@ class FrictionLaw:
     set; ``phases`` how its phase observables are read (``"band"``: stick is
     ``|u| < stick_band``, located inside a step; ``"alpha"``: the alpha returned by ``force``
     at a step's midpoint holds for the step; ``"elasto"``: the elasto-plastic bookkeeping,
-    built-in only); ``switch_jumps``: its switches mark jumps of the right-hand side (the
-    integrators then also probe for grazing crossings).
+    built-in only); ``switch_jumps``: its switches mark jumps of the right-hand side, or
+    corners where an error control that sees neither end of a dip would step over them (the
+    integrators then also probe for grazing crossings: GMS, Dahl, the static laws).
     """
 
     name: str = ""

@@ -7,7 +7,10 @@ method and its self-check are stated there), under sine-velocity dither, without
 square-velocity dither (``gms-3-square``: until 2026-11-30 the engine kept a GMS element
 slipping for a step after the square wave reversed u, 20 % off in F_mean even at rtol
 1e-12), also on the servo (``gms-3-servo-square``: elements reaching their shares a hair
-apart, the second switched a step late, F_mean 1 % off at rtol 1e-13). Each case runs here
+apart, the second switched a step late, F_mean 1 % off at rtol 1e-13), and Dahl on the
+servo (``dahl-a1.5-servo``: u dipping below zero and back inside one DP5 step while z is
+saturated, a corner passed unseen until 2026-11-30: F_mean 1.8e-4 off at standard, 1.3e-6
+at reference). Each case runs here
 at the three accuracy levels' tolerances (sweeps.spec.accuracy.LEVELS): Dahl must meet each
 level's promise (TARGET_ERROR, relative) on ``v_mean`` and ``F_mean``; every case must
 converge to its reference at a tight tolerance.
