@@ -153,7 +153,8 @@ class FrictionLaw:
     at a step's midpoint holds for the step; ``"elasto"``: the elasto-plastic bookkeeping,
     built-in only); ``switch_jumps``: its switches mark jumps of the right-hand side, or
     corners where an error control that sees neither end of a dip would step over them (the
-    integrators then also probe for grazing crossings: GMS, Dahl, the static laws).
+    integrators then also probe for grazing crossings, and under a sine dither cap a step
+    at a quarter of its period: GMS, Dahl, the static laws).
     """
 
     name: str = ""

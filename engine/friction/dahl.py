@@ -33,7 +33,9 @@ class Dahl(FrictionLaw):
     # dip and passed the corner unseen -- the servo under sine-velocity dither (W 0.3,
     # omega 100, v_ref 0.1, dahl_alpha 1.5) took F_mean 1.8e-4 off at rtol 1e-8 and the same
     # wrong answer, 1.2e-6 off, at 1e-10 and 1e-11 (tests/engine/test_models_reference.py,
-    # case dahl-a1.5-servo). It costs 0.95-1.20x the time (docs/ACCURACY.md 9).
+    # case dahl-a1.5-servo). Under a sine dither it also caps a step at a quarter of the
+    # dither's period (engine.kernels.period_cap: a step sees one dip at most). Both cost
+    # 0.95-1.20x the time (docs/ACCURACY.md 9).
     switch_jumps = True
 
     def effects(self, scene):

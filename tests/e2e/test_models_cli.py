@@ -67,6 +67,7 @@ def test_bad_user_code_is_one_line_exit_2_and_nothing_written(tmp_path, module, 
 @pytest.mark.parametrize("friction, dither, capped", [
     ("gms", "sine-velocity", True),        # modes: a reversal stepped over changes them
     ("stribeck", "sine-force", True),      # switches that mark jumps
+    ("dahl", "sine-velocity", True),       # a corner probed for grazing (switch_jumps)
     ("lugre", "sine-velocity", False),     # neither: no cap compiled in
     ("gms", "square-velocity", False),     # the square wave's switches are stops already
 ])
