@@ -186,6 +186,13 @@ class FrictionLaw:
         """The effects the plan lists for this law (name -> on)."""
         return {}
 
+    def relaxation_factor(self, values: dict) -> float:
+        """Optional: how many times faster than ``sigma0 |u| / fc`` (LuGre's bristle, Eq. 2.3
+        linearised) the law's states relax at most, for its own parameter ``values`` (name ->
+        list of floats, checked). The planner's test of a fixed step's stability reads it
+        (sweeps.spec.fixed_step: RK4 at draft under a square wave, explicit ``rk4``)."""
+        return 1.0
+
 
 class MechanicalSystem:
     """Base of a mechanical system (docs/MODELS.md, rules 10-15)."""

@@ -184,9 +184,12 @@ def rk4_fits(spec: Spec, sigma0: float, level: str) -> bool:
         return False                 # RK4 lands neither on alpha's kinks nor on the band
     if g.dither != "none" and not g.omega_min > 0:
         return False
+    from .fixed_step import relaxation_factor
+
     h = g.largest_step(FIXED_STEPS[level], FIXED_H[level])
     fc = spec.params.fc or system_defaults(spec.system)["fc"]
-    return h * sigma0 * (2.0 * g.v_max + g.W_max) / fc <= RK4_MAX_H_LAMBDA
+    rate = sigma0 * relaxation_factor(spec) * (2.0 * g.v_max + g.W_max) / fc
+    return h * rate <= RK4_MAX_H_LAMBDA
 
 
 def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import cmath
 import math
+import numbers
 from dataclasses import dataclass
 
 from engine import params as P
@@ -17,7 +18,7 @@ from .grid import GridFacts
 from .models import ExplicitAccuracy, is_adaptive
 
 SINES = ("sine-velocity", "sine-force")
-BRISTLE_LAWS = ("lugre", "elastoplastic")
+BRISTLE_LAWS = ("lugre", "elastoplastic", "dahl")   # a bristle of stiffness sigma0
 
 
 # --- the scene's rates --------------------------------------------------------------------
@@ -32,6 +33,24 @@ class Rate:
     per_step: bool = False
 
 
+def relaxation_factor(spec) -> float:
+    """The spec's law's ``relaxation_factor`` (engine.contract.FrictionLaw) for its own
+    parameter values: 1 for LuGre and the elasto-plastic law, ``a 2**(a - 1)`` for Dahl.
+    A brought law's hook that fails, or answers no positive number, is one ModelError line."""
+    from engine import registry
+    from engine.contract import ModelError
+    from engine.user_code import hook
+
+    law = registry.law(spec.friction)
+    values = registry.check_values(spec.friction, spec.system, spec.model_values)
+    mine = {name: values[name] for name in registry.own_params(law)}
+    f = hook(spec.friction, "relaxation_factor", law.relaxation_factor, mine)
+    if isinstance(f, bool) or not isinstance(f, numbers.Real) or not 0.0 < f < math.inf:
+        raise ModelError(f"{spec.friction!r}: relaxation_factor must return a positive "
+                         f"number, got {f!r}"[:300])
+    return float(f)
+
+
 def rates(spec, g: GridFacts, p) -> list[Rate]:
     """The scene's eigenvalue estimates (sweeps.spec.feasibility docstring, 2); ``p`` the
     spec's parameter vector (sweeps.spec.grid.base_params)."""
@@ -40,18 +59,19 @@ def rates(spec, g: GridFacts, p) -> list[Rate]:
     slow_a, slow_omega = abs(p[P.SLOW_A]), p[P.SLOW_OMEGA]
     if spec.friction in BRISTLE_LAWS:
         sigma0, fc = p[P.SIGMA0], min(p[P.FC], p[P.FS])
+        rate = sigma0 * relaxation_factor(spec) / fc    # x u_max
         if slider:
             u_max = 2.0 * g.v_max + g.W_max + slow_a
             out.append(Rate(f"bristle relaxation sigma0 u_max / fc (u_max = 2 v_ref + W + "
-                            f"|slow force| = {u_max:.3g})", -sigma0 * u_max / fc))
-            c, k = p[P.SIGMA1] + p[P.SIGMA2], sigma0 + 1.0
+                            f"|slow force| = {u_max:.3g})", -rate * u_max))
+            damping = p[P.SIGMA1] if spec.friction != "dahl" else 0.0   # (Dahl has none)
+            c, k = damping + p[P.SIGMA2], sigma0 + 1.0
             root = cmath.sqrt(c * c / 4.0 - k)
             out.append(Rate("stuck bristle as a spring-damper", -c / 2.0 - root))
         else:
             u_max = g.v_max + g.W_max
             out.append(Rate(f"bristle relaxation sigma0 u_max / fc (u_max = v_ref + W = "
-                            f"{u_max:.3g})",
-                            -sigma0 * u_max / fc))
+                            f"{u_max:.3g})", -rate * u_max))
     if g.dither in SINES:
         out.append(Rate("sine dither (h omega)", 1j, per_step=True))
     if slider and slow_a != 0.0 and slow_omega > 0.0:
