@@ -26,6 +26,7 @@ import numpy as np
 
 from . import params as P
 from .contract import FrictionLaw, MechanicalSystem, ModelError, Param
+from .user_code import USER_FAULTS
 from .user_code import import_module as _import
 from .user_code import one_line as _one_line
 from .user_code import short as _short
@@ -95,7 +96,7 @@ def resolve(kind: str, ref: str):
                              f"engine.contract.{base.__name__} (docs/MODELS.md rule 1)")
         try:
             obj = obj()
-        except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+        except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
             raise ModelError(f"{kind} {ref!r}: {attr}() failed: {_one_line(exc)}"
                              f"{_where(exc, module)}") from None
     if not isinstance(obj, base):
@@ -270,7 +271,7 @@ def check_values(friction: str, system_: str, values: dict) -> dict:
                 check(mine)
             except ModelError:
                 raise
-            except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+            except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
                 raise ModelError(f"{owner.name}.check failed: {_one_line(exc)}{_where(exc)}") \
                     from None
     return out

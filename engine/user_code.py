@@ -18,6 +18,10 @@ from pathlib import Path
 
 from .contract import ModelError
 
+# what user code may raise that ends in one line (a ModelError): any exception, and a
+# sys.exit(), which would otherwise end `ditherlab` silently with the code it names
+USER_FAULTS = (Exception, SystemExit)
+
 
 def import_module(kind: str, ref: str, module_name: str):
     try:
@@ -54,14 +58,17 @@ def import_module(kind: str, ref: str, module_name: str):
         raise ModelError(f"{kind} {ref!r}: cannot import {module_name!r}: SyntaxError "
                          f"({exc.msg}) at {Path(exc.filename or '?').name} line {exc.lineno}") \
             from None
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+    except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
         raise ModelError(f"{kind} {ref!r}: cannot import {module_name!r}: {one_line(exc)}"
                          f"{where(exc)}") from None
 
 
 def short(value, limit: int = 60) -> str:
     """``repr(value)`` cut to about ``limit`` characters (an echoed spec value)."""
-    text = repr(value)
+    try:
+        text = repr(value)
+    except Exception:   # noqa: BLE001  (a user's __repr__, or an int past str's digit limit)
+        text = f"<a {type(value).__name__}>"
     return text if len(text) <= limit else text[:limit] + "..."
 
 
@@ -90,7 +97,7 @@ def hook(ref: str, what: str, fn, *args, count: bool = False):
         value = fn(*args)
     except ModelError:
         raise
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+    except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
         raise ModelError(f"{ref!r}: {what} failed: {one_line(exc)}{where(exc)}") from None
     if not count:
         return value

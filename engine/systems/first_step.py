@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from .. import registry
 from ..contract import ModelError
+from ..user_code import USER_FAULTS
 from . import build_context, make_system
 
 
@@ -32,7 +33,7 @@ def probe(scene, p) -> None:
         system.events(0.0, y[:n], p, 1.0, g[:max(system.n_events, 1)])
     except ModelError:
         raise
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+    except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
         raise ModelError(compile_line(scene, exc)) from None
     who = f"friction {scene.friction!r} on system {scene.system!r}"
     if (y[n:] != SENTINEL).any() or (dy[n:] != SENTINEL).any():
@@ -56,7 +57,7 @@ def probe(scene, p) -> None:
             _probe_scales(*args, p)
     except ModelError:
         raise
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+    except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
         raise ModelError(compile_line(scene, exc)) from None
 
 
@@ -77,7 +78,7 @@ def _probe_parts(scene, p) -> list:
         return scales
     except ModelError:
         raise
-    except Exception as exc:   # noqa: BLE001  (user code: any fault is one line)
+    except USER_FAULTS as exc:   # user code: any fault, sys.exit too, is one line
         raise ModelError(compile_line(scene, exc)) from None
 
 

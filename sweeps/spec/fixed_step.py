@@ -39,16 +39,34 @@ def relaxation_factor(spec) -> float:
     A brought law's hook that fails, or answers no positive number, is one ModelError line."""
     from engine import registry
     from engine.contract import ModelError
-    from engine.user_code import hook
+    from engine.user_code import hook, short
 
     law = registry.law(spec.friction)
     values = registry.check_values(spec.friction, spec.system, spec.model_values)
     mine = {name: values[name] for name in registry.own_params(law)}
     f = hook(spec.friction, "relaxation_factor", law.relaxation_factor, mine)
-    if isinstance(f, bool) or not isinstance(f, numbers.Real) or not 0.0 < f < math.inf:
+    try:   # (float(10**400) overflows)
+        ok = not isinstance(f, bool) and isinstance(f, numbers.Real) and 0.0 < float(f) < math.inf
+    except OverflowError:
+        ok = False
+    if not ok:
         raise ModelError(f"{spec.friction!r}: relaxation_factor must return a positive "
-                         f"number, got {f!r}"[:300])
+                         f"number, got {short(f)}")
     return float(f)
+
+
+def bristle_like(spec) -> bool:
+    """Whether the spec's law has a bristle whose relaxation the explicit step must resolve:
+    LuGre, elasto-plastic, Dahl, and a brought law that declares its ``relaxation_factor``
+    (one that inherits the contract's default says nothing about its states: GMS's do not
+    relax at ``sigma0``)."""
+    from engine import registry
+    from engine.contract import FrictionLaw
+
+    if spec.friction in BRISTLE_LAWS:
+        return True
+    own = type(registry.law(spec.friction)).relaxation_factor
+    return registry.is_import_path(spec.friction) and own is not FrictionLaw.relaxation_factor
 
 
 def rates(spec, g: GridFacts, p) -> list[Rate]:
@@ -57,14 +75,15 @@ def rates(spec, g: GridFacts, p) -> list[Rate]:
     out = []
     slider = spec.system == "slider"
     slow_a, slow_omega = abs(p[P.SLOW_A]), p[P.SLOW_OMEGA]
-    if spec.friction in BRISTLE_LAWS:
+    if bristle_like(spec):
         sigma0, fc = p[P.SIGMA0], min(p[P.FC], p[P.FS])
         rate = sigma0 * relaxation_factor(spec) / fc    # x u_max
         if slider:
             u_max = 2.0 * g.v_max + g.W_max + slow_a
             out.append(Rate(f"bristle relaxation sigma0 u_max / fc (u_max = 2 v_ref + W + "
                             f"|slow force| = {u_max:.3g})", -rate * u_max))
-            damping = p[P.SIGMA1] if spec.friction != "dahl" else 0.0   # (Dahl has none)
+            # sigma1 is LuGre's and elasto-plastic's (|lambda|^2 = k whatever the damping)
+            damping = p[P.SIGMA1] if spec.friction in ("lugre", "elastoplastic") else 0.0
             c, k = damping + p[P.SIGMA2], sigma0 + 1.0
             root = cmath.sqrt(c * c / 4.0 - k)
             out.append(Rate("stuck bristle as a spring-damper", -c / 2.0 - root))

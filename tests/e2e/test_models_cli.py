@@ -38,6 +38,19 @@ class X(FrictionLaw):
 
         return LawKernels(rates, force, 0, None, init, init)
 ''',
+    # sys.exit() in a hook ended `ditherlab` silently with its code (0: "done") until
+    # 2026-11-30 (engine.user_code.USER_FAULTS)
+    "exits_at_import": "import sys\nsys.exit(0)\n",
+    "exits_in_a_hook": '''
+import sys
+from engine.friction.dahl import Dahl
+
+class X(Dahl):
+    name = "x"
+
+    def check(self, values):
+        sys.exit(0)
+''',
 }
 
 
@@ -56,7 +69,9 @@ def test_bad_user_code_is_one_line_exit_2_and_nothing_written(tmp_path, module, 
     lines = [ln for ln in out.stderr.splitlines() if ln.strip()]
     assert "Traceback" not in out.stderr
     assert module in out.stderr, out.stderr
-    what = "cannot import" if module == "does_not_import" else "numba cannot compile"
+    what = {"does_not_import": "cannot import", "cannot_compile": "numba cannot compile",
+            "exits_at_import": "cannot import 'exits_at_import': SystemExit: 0",
+            "exits_in_a_hook": "x.check failed: SystemExit: 0"}[module]
     assert any(what in ln for ln in lines), out.stderr
     if module == "cannot_compile":
         assert f"{module}.py line" in out.stderr, out.stderr
