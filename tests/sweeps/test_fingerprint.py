@@ -137,8 +137,8 @@ store store.atomic store.attrs store.catalogue store.catalogue_db store.cube sto
 store.cubedata store.errors store.flags store.journal store.journal_groups store.layout
 store.lease store.netcdf_write store.points store.record
 sweeps sweeps.errors sweeps.version
-sweeps.spec sweeps.spec.accuracy sweeps.spec.grid sweeps.spec.messages sweeps.spec.methods
-sweeps.spec.model_params sweeps.spec.models
+sweeps.spec sweeps.spec.accuracy sweeps.spec.fixed_step sweeps.spec.grid sweeps.spec.messages
+sweeps.spec.methods sweeps.spec.model_params sweeps.spec.models
 sweeps.planning sweeps.planning.blocks sweeps.planning.lattice sweeps.planning.plan
 sweeps.planning.refine
 sweeps.workers sweeps.workers.cluster sweeps.workers.compute sweeps.workers.deaths
