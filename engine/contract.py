@@ -204,6 +204,10 @@ class MechanicalSystem:
     dithers: tuple = ("none", "square-velocity", "sine-velocity", "sine-force")
     outputs: dict = {}            # own observables: name -> (long_name, units)
     defaults: dict | None = None  # the shared parameters' defaults (engine.params)
+    # the accuracy levels' atol in each state's natural scale (Settings.atol_units =
+    # "natural"), for a system in units where the states are far from 1 (the contact, in SI:
+    # z ~ fc / sigma0 = 1e-5 m); else absolute, calibrated on the paper's slider
+    natural_atol: bool = False
 
     def n_states(self, scene) -> int:
         return len(self.state_names)

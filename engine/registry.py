@@ -140,6 +140,9 @@ def _check_declarations(kind: str, ref: str, obj) -> None:
         if not isinstance(getattr(obj, "switch_jumps", False), bool):
             raise ModelError(f"{kind} {ref!r}: switch_jumps must be True or False, got "
                              f"{obj.switch_jumps!r}")
+    elif not isinstance(getattr(obj, "natural_atol", False), bool):
+        raise ModelError(f"{kind} {ref!r}: natural_atol must be True or False, got "
+                         f"{_short(obj.natural_atol)}")
 
 
 def source_digest(ref: str) -> str | None:

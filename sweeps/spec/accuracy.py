@@ -215,8 +215,16 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
     if spec.friction in STATIC_LAWS:
         tol = _static_tol(spec, tol)
     settings = Settings(rtol=tol["rtol"], atol=tol["atol"], steps_per_period=FIXED_STEPS[acc],
-                        h=FIXED_H[acc])
+                        h=FIXED_H[acc], atol_units=_atol_units(spec))
     return Numerics(integrator, settings, acc)
+
+
+def _atol_units(spec: Spec) -> str:
+    """``"natural"`` for a system that asks for it (engine.contract.MechanicalSystem
+    ``natural_atol``: the contact, whose states are SI), else ``"absolute"``."""
+    from engine import registry
+
+    return "natural" if registry.system(spec.system).natural_atol else "absolute"
 
 
 def _static_tol(spec: Spec, tol: dict) -> dict:

@@ -83,19 +83,47 @@ def _kinks(d, law, dither, sq):
     return evs
 
 
-def _piece(fun, t0, t1, y, events):
+def _piece(fun, t0, t1, y, events, atol=ATOL, max_step=np.inf):
     """Integrate fun over [t0, t1] restarting at terminal events; returns y(t1)."""
     t = t0
     while t < t1:
-        sol = solve_ivp(fun, (t, t1), y, method="DOP853", rtol=RTOL, atol=ATOL, events=events)
+        sol = solve_ivp(fun, (t, t1), y, method="DOP853", rtol=RTOL, atol=atol, events=events,
+                        max_step=max_step)
         y = sol.y[:, -1]
         if sol.status != 1:
             return y
         t = sol.t[-1]
         t_n = min(t + NUDGE, t1)
-        y = solve_ivp(fun, (t, t_n), y, method="DOP853", rtol=RTOL, atol=ATOL).y[:, -1]
+        y = solve_ivp(fun, (t, t_n), y, method="DOP853", rtol=RTOL, atol=atol).y[:, -1]
         t = t_n
     return y
+
+
+def contact(d: dict, law: str, t_end: float, t_transient: float) -> dict:
+    """F_mean of the contact of Sec. 3 (DESIGN.md §1: no mass, ``u = v_ref + W cos(omega
+    t)`` prescribed, ``dz = law(u, z)``, ``z(0) = 0``) over ``[t_transient, t_end]``, from the
+    quadrature ``dQ = F``. The states are SI (``z ~ fc / sigma0``), so atol is scaled per
+    state (``z``: 1e-14 fc / sigma0; ``Q``: 1e-14 fc t_end); steps span at most 1/200 of
+    the dither period, so a crossing of ``u = 0`` and back is seen."""
+    def rhs(t, y):
+        u = d["v_ref"] + d["W"] * np.cos(d["omega"] * t)
+        dz, F = friction(u, y[0], d, law)
+        return [dz, F]
+
+    def ev_u(t, y):
+        return d["v_ref"] + d["W"] * np.cos(d["omega"] * t)
+    evs = [ev_u]
+    if law == "elastoplastic":
+        for frac in (d["lam"], 1.0):
+            evs.append(lambda t, y, frac=frac:
+                       abs(y[0]) - frac * g(ev_u(t, y), d) / d["sigma0"])
+    for ev in evs:
+        ev.terminal = True
+    atol = np.array([ATOL * d["fc"] / d["sigma0"], ATOL * d["fc"] * t_end])
+    step = 2 * np.pi / d["omega"] / 200 if d["W"] and d["omega"] else np.inf
+    y_tr = _piece(rhs, 0.0, t_transient, np.zeros(2), evs, atol, step)
+    y_end = _piece(rhs, t_transient, t_end, y_tr, evs, atol, step)
+    return {"F_mean": (y_end[1] - y_tr[1]) / (t_end - t_transient)}
 
 
 def slider(d: dict, law: str, dither: str, y0, t_end: float, stops=()):
