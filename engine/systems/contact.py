@@ -100,13 +100,17 @@ class Contact(MechanicalSystem):
 
         @b.jit(inline="always", error_model="numpy")
         def scales(p, out):
-            """The force integral ``~ fc`` (N s) and the displacement ``~ max(|v_m|, v_a)``
-            (m), where controlled (the law scales z: ``fc / sigma0``, metres)."""
+            """The force integral ``~ fc t_end`` (N s) and the displacement ``~ max(|v_m|,
+            v_a) t_end`` (m), where controlled (a stateless law: Contact.error_size; the law
+            scales z: ``fc / sigma0``, metres). Without ``t_end`` (before 2026-11-30) the
+            scales assumed a run of 1 s; the contact's last milliseconds, so atol outweighed
+            rtol: a Stribeck contact at omega 1e6 was 1.3e-6 off in F_mean at reference."""
             fc = abs(p[P.FC]) if p[P.FC] != 0.0 else 1.0
             vs = max(abs(p[P.V_REF]), abs(p[P.W]))
+            span = p[P.T_END] if p[P.T_END] > 0.0 else 1.0
             if 0 <= qf < m:
-                out[qf] = fc
+                out[qf] = fc * span
             if 0 <= qx < m:
-                out[qx] = vs if vs > 0.0 else 1.0
+                out[qx] = (vs if vs > 0.0 else 1.0) * span
 
         return SystemKernels(drive, dynamics, position, velocity, init, scales)

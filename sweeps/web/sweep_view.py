@@ -57,7 +57,8 @@ def _plan(spec: dict) -> dict | str:
             "on": [k for k, v in effects.items() if v], "off": [k for k, v in effects.items()
                                                                  if not v],
             "numerics": (f"{plan.numerics.integrator} ({plan.numerics.label}): rtol={s.rtol:g} "
-                         f"atol={s.atol:g}{step_cap_note(plan.scene)}" if plan.path == "simulate"
+                         f"atol={s.atol:g}{' (natural units)' if s.atol_units == 'natural' else ''}"
+                         f"{step_cap_note(plan.scene)}" if plan.path == "simulate"
                          else "no time integration"),
             "outputs": list(plan.outputs)}
 

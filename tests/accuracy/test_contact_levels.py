@@ -65,3 +65,22 @@ def test_each_level_keeps_its_promise_on_the_contact(references, level):
         got = float(np.asarray(res.outputs["F_mean"])[0])
         err = abs(got - ref) / max(abs(ref), 1e-3)
         assert err <= TARGET_ERROR[level], (level, v_m, omega, got, ref, f"{err:.1e}")
+
+
+@pytest.mark.parametrize("omega", [1e5, 1e6])
+def test_a_stateless_law_on_the_contact_keeps_the_reference_promise_at_high_omega(omega):
+    """Stribeck on the contact has no bristle: the quadratures of F and u are the states
+    under error control (Contact.error_size), scaled ``fc`` and ``max(v_m, v_a)`` as if the
+    run lasted 1 s. A contact's run lasts milliseconds, so atol outweighed rtol: at the
+    reference level F_mean was 1.4e-7 (omega 1e5) and 1.3e-6 (1e6) off (a review found
+    it, 2026-11-30). The scales now take ``t_end``. Reference: ``F(t)`` in closed form,
+    integrated by quad (tests/engine/reference.py ``contact_static``, the band included)."""
+    plan = make_plan(parse_spec({**_spec(1e-3, omega), "friction": "stribeck"}), "reference")
+    res = run_block(plan.scene, plan.points, plan.params, plan.numerics.settings)
+    assert np.all(res.status == S.OK)
+    d = P.unpack(plan.params)
+    d.update(W=3e-3, omega=omega, v_ref=1e-3)
+    ref = R.contact_static(d, "stribeck", float(plan.params[P.T_END]),
+                           float(plan.params[P.T_TRANSIENT]))["F_mean"]
+    got = float(np.asarray(res.outputs["F_mean"])[0])
+    assert abs(got - ref) / max(abs(ref), 1e-3) <= TARGET_ERROR["reference"], (got, ref)

@@ -14,7 +14,7 @@ level): the engine's Karnopp band of width ``stick_band`` must agree with it to 
 from __future__ import annotations
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import quad, solve_ivp
 
 RTOL, ATOL = 1e-12, 1e-14
 NUDGE = 1e-9
@@ -89,6 +89,9 @@ def _piece(fun, t0, t1, y, events, atol=ATOL, max_step=np.inf):
     while t < t1:
         sol = solve_ivp(fun, (t, t1), y, method="DOP853", rtol=RTOL, atol=atol, events=events,
                         max_step=max_step)
+        if sol.status == -1:   # (a reference that failed must not pass for one)
+            raise RuntimeError(f"reference: solve_ivp failed at t = {t}: "
+                               f"{sol.message}")
         y = sol.y[:, -1]
         if sol.status != 1:
             return y
@@ -100,11 +103,12 @@ def _piece(fun, t0, t1, y, events, atol=ATOL, max_step=np.inf):
 
 
 def contact(d: dict, law: str, t_end: float, t_transient: float) -> dict:
-    """F_mean of the contact of Sec. 3 (DESIGN.md §1: no mass, ``u = v_ref + W cos(omega
-    t)`` prescribed, ``dz = law(u, z)``, ``z(0) = 0``) over ``[t_transient, t_end]``, from the
-    quadrature ``dQ = F``. The states are SI (``z ~ fc / sigma0``), so atol is scaled per
-    state (``z``: 1e-14 fc / sigma0; ``Q``: 1e-14 fc t_end); steps span at most 1/200 of
-    the dither period, so a crossing of ``u = 0`` and back is seen."""
+    """F_mean of the contact of Sec. 3 under sine-velocity dither (DESIGN.md §1: no mass,
+    ``u = v_ref + W cos(omega t)`` prescribed, ``dz = law(u, z)``, ``z(0) = 0``) over
+    ``[t_transient, t_end]``, from the quadrature ``dQ = F``. The states are SI (``z ~ fc /
+    sigma0``), so atol is scaled per state (``z``: 1e-14 fc / sigma0; ``Q``: 1e-14 fc t_end);
+    steps span at most 1/200 of the dither period, so a crossing of ``u = 0`` and back is
+    seen."""
     def rhs(t, y):
         u = d["v_ref"] + d["W"] * np.cos(d["omega"] * t)
         dz, F = friction(u, y[0], d, law)
@@ -239,3 +243,34 @@ def static_square_stick_slip(d: dict, law: str, t_end: float) -> tuple[np.ndarra
             sgn = -sq
         k += 1
     return np.array([e, v]), sticks
+
+
+def contact_static(d: dict, law: str, t_end: float, t_transient: float) -> dict:
+    """F_mean of the contact under sine-velocity dither with a static law (Coulomb,
+    Stribeck): no state, so ``F(t)`` is known in closed form (``g(u) sgn(u) + sigma2 u``
+    outside the Karnopp band ``|u| < stick_band``, 0 inside it: nothing holds the contact)
+    and its mean is a quadrature, by ``scipy.integrate.quad`` between the instants where
+    ``u`` crosses the band's edges (found from ``cos(omega t)`` in closed form)."""
+    vm, va, w, band = d["v_ref"], d["W"], d["omega"], d["stick_band"]
+
+    def force(t):
+        u = vm + va * np.cos(w * t)
+        if abs(u) < band:
+            return 0.0
+        level = g(u, d) if law == "stribeck" else d["fc"]
+        return level * np.sign(u) + d["sigma2"] * u
+
+    cuts = {t_transient, t_end}
+    for edge in (-band, band):
+        x = (edge - vm) / va
+        if abs(x) <= 1.0:
+            a = np.arccos(x)
+            for k in range(int(w * t_end / (2 * np.pi)) + 2):
+                for phase in (a, 2 * np.pi - a):
+                    t = (phase + 2 * np.pi * k) / w
+                    if t_transient < t < t_end:
+                        cuts.add(t)
+    ts = sorted(cuts)
+    total = sum(quad(force, a, b, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+                for a, b in zip(ts[:-1], ts[1:]))
+    return {"F_mean": total / (t_end - t_transient)}
