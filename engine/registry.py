@@ -132,17 +132,14 @@ def _check_declarations(kind: str, ref: str, obj) -> None:
     if group is not None and not (isinstance(group, str) and group.isidentifier()):
         raise ModelError(f"{kind} {ref!r}: its group must be None or an identifier, got "
                          f"{group!r}")
-    if kind == "friction":
-        phases = getattr(obj, "phases", None)
-        if phases not in ("band", "alpha"):   # ("elasto": the built-in elasto-plastic law's)
-            raise ModelError(f"{kind} {ref!r}: phases must be 'band' or 'alpha' (docs/MODELS.md "
-                             f"rule 6), got {phases!r}")
-        if not isinstance(getattr(obj, "switch_jumps", False), bool):
-            raise ModelError(f"{kind} {ref!r}: switch_jumps must be True or False, got "
-                             f"{obj.switch_jumps!r}")
-    elif not isinstance(getattr(obj, "natural_atol", False), bool):
-        raise ModelError(f"{kind} {ref!r}: natural_atol must be True or False, got "
-                         f"{_short(obj.natural_atol)}")
+    phases = getattr(obj, "phases", None)
+    if kind == "friction" and phases not in ("band", "alpha"):   # ("elasto": built-in only)
+        raise ModelError(f"{kind} {ref!r}: phases must be 'band' or 'alpha' (docs/MODELS.md "
+                         f"rule 6), got {phases!r}")
+    flag = "switch_jumps" if kind == "friction" else "natural_atol"
+    if not isinstance(getattr(obj, flag, False), bool):
+        raise ModelError(f"{kind} {ref!r}: {flag} must be True or False, got "
+                         f"{_short(getattr(obj, flag))}")
 
 
 def source_digest(ref: str) -> str | None:
