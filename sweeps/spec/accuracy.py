@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 from engine.settings import Settings
 
+from . import model_params
 from .grid import system_defaults
 from .methods import resolve_outputs
 from .models import ExplicitAccuracy, Spec
@@ -199,7 +200,7 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
         base = Settings()
         settings = Settings(
             rtol=acc.rtol or base.rtol, atol=acc.atol or (acc.rtol or base.rtol) * 1e-3,
-            atol_units=acc.atol_units,
+            atol_units=acc.atol_units or model_params.atol_units(spec),
             steps_per_period=acc.steps_per_period or base.steps_per_period,
             h=acc.step or base.h)
         return Numerics(acc.integrator, settings, "explicit")
@@ -215,16 +216,8 @@ def numerics(spec: Spec, sigma0: float, level: str | None = None) -> Numerics:
     if spec.friction in STATIC_LAWS:
         tol = _static_tol(spec, tol)
     settings = Settings(rtol=tol["rtol"], atol=tol["atol"], steps_per_period=FIXED_STEPS[acc],
-                        h=FIXED_H[acc], atol_units=_atol_units(spec))
+                        h=FIXED_H[acc], atol_units=model_params.atol_units(spec))
     return Numerics(integrator, settings, acc)
-
-
-def _atol_units(spec: Spec) -> str:
-    """``"natural"`` for a system that asks for it (engine.contract.MechanicalSystem
-    ``natural_atol``: the contact, whose states are SI), else ``"absolute"``."""
-    from engine import registry
-
-    return "natural" if registry.system(spec.system).natural_atol else "absolute"
 
 
 def _static_tol(spec: Spec, tol: dict) -> dict:

@@ -62,3 +62,13 @@ def problems(spec) -> list[str]:
     except (ModelError, ValueError) as exc:
         return [str(exc)]
     return []
+
+
+def atol_units(spec) -> str:
+    """The atol units the accuracy levels (and an explicit accuracy that names none) take on
+    the spec's system: ``"natural"`` where the system asks for them
+    (engine.contract.MechanicalSystem ``natural_atol``: the contact, whose states are SI),
+    else ``"absolute"``."""
+    from engine import registry
+
+    return "natural" if registry.system(spec.system).natural_atol else "absolute"

@@ -150,17 +150,16 @@ def is_adaptive(integrator: str) -> bool:
 class ExplicitAccuracy(_Strict):
     """Explicit numerics instead of a level: an integrator and its step policy.
 
-    An adaptive method (``dopri5``, ``rodas4`` alias ``rosenbrock``) takes ``rtol``,
-    ``atol`` and ``atol_units``; the fixed-step ``rk4`` takes ``steps_per_period`` (with
-    dither) or ``step`` (without). An option the method would ignore is refused, and so is
-    a fixed step outside the method's stability region (:mod:`sweeps.spec.feasibility`).
-    """
+    An adaptive method (``dopri5``, ``rodas4`` alias ``rosenbrock``) takes ``rtol``, ``atol``
+    and ``atol_units`` ("natural": per state, times its scale; not given: the system's own,
+    natural on the SI contact); ``rk4`` takes ``steps_per_period`` (with dither) or ``step``
+    (without). An option the method would ignore is refused, and so is a fixed step outside
+    the method's stability region (:mod:`sweeps.spec.feasibility`)."""
 
     integrator: str = "dopri5"
     rtol: Annotated[float, Field(ge=MIN_RTOL, lt=1.0)] | None = None
     atol: PositiveFloat | None = None
-    # "natural": atol per state component times its natural scale (engine.settings.Settings)
-    atol_units: Literal["absolute", "natural"] = "absolute"
+    atol_units: Literal["absolute", "natural"] | None = None   # None: model_params.atol_units
     steps_per_period: Annotated[int, Field(ge=1, le=1_000_000)] | None = None
     step: PositiveFloat | None = None
 
@@ -261,12 +260,13 @@ class Spec(_Strict):
         """The result-changing content as plain data (no cosmetic fields). A field added
         later with a default that reproduces the old behaviour is left out at that default,
         so existing sweeps keep their ids (and resume): ``refine`` (the exhaustive grid),
-        ``device`` (the CPU; a GPU sweep is another sweep), ``atol_units``."""
+        ``device`` (the CPU; a GPU sweep is another sweep), ``atol_units`` (not given, or
+        the system's own: the same numbers)."""
         data = self.model_dump(mode="json", exclude=set(COSMETIC))
         for key in [k for k, old in (("refine", False), ("device", "cpu")) if data[k] == old]:
             del data[key]
-        acc = data.get("accuracy")
-        if isinstance(acc, dict) and acc.get("atol_units") == "absolute":
+        acc, own = data.get("accuracy"), model_params.atol_units(self)
+        if isinstance(acc, dict) and acc.get("atol_units") in (None, own):
             del acc["atol_units"]
         return data
 
