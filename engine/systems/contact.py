@@ -103,8 +103,9 @@ class Contact(MechanicalSystem):
             """The force integral ``~ fc t_end`` (N s) and the displacement ``~ max(|v_m|,
             v_a) t_end`` (m), where controlled (a stateless law: Contact.error_size; the law
             scales z: ``fc / sigma0``, metres). Without ``t_end`` (before 2026-11-30) the
-            scales assumed a run of 1 s; the contact's last milliseconds, so atol outweighed
-            rtol: a Stribeck contact at omega 1e6 was 1.3e-6 off in F_mean at reference."""
+            scales assumed a run of 1 s, but the contact's runs last milliseconds, so atol
+            outweighed rtol: a Stribeck contact at omega 1e6 was 1.3e-6 off in F_mean at
+            reference."""
             fc = abs(p[P.FC]) if p[P.FC] != 0.0 else 1.0
             vs = max(abs(p[P.V_REF]), abs(p[P.W]))
             span = p[P.T_END] if p[P.T_END] > 0.0 else 1.0

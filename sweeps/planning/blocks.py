@@ -21,12 +21,12 @@ def balanced_blocks(cost: np.ndarray, n_blocks: int, size: int | None = None
     the emptiest block so far; with ``size``, the spec's ``block_size``, onto the emptiest
     of those with fewer than ``size`` points), each block's indices sorted; the costliest
     blocks come first, so the dispatch starts the long work early and the workers finish
-    together. Without ``size`` and with TAIL_BLOCKS x 3 blocks or more, the work of the last TAIL_BLOCKS goes into
-    blocks of half and a quarter of the size (:func:`block_shares`), which the dispatch
-    takes last: a worker done before the others waits for the last block of all, and a
-    small last block is a short wait. Fig. 14's measured point costs list-scheduled on 16
-    workers (scripts/schedule_projection.py): 0.953 of the ideal in 173 equal blocks,
-    0.989 in 237 with this tail.
+    together. Without ``size`` and with TAIL_BLOCKS x 3 blocks or more, the work of the last
+    TAIL_BLOCKS goes into blocks of half and a quarter of the size (:func:`block_shares`),
+    which the dispatch takes last: a worker done before the others waits for the last block
+    of all, and a small last block is a short wait. Fig. 14's measured point costs
+    list-scheduled on 16 workers (scripts/schedule_projection.py): 0.953 of the ideal in 173
+    equal blocks, 0.989 in 237 with this tail.
     (The greedy loop is Python's, but it keeps one block number per point in an int32
     array: at 10^6 points 4 MB, where lists of Python ints took 40 MB; 1.1 s, was 1.9.)"""
     import heapq

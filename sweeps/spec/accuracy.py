@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from engine.settings import Settings
 
 from . import model_params
+from .fixed_step import relaxation_factor
 from .grid import system_defaults
 from .methods import resolve_outputs
 from .models import ExplicitAccuracy, Spec
@@ -185,8 +186,6 @@ def rk4_fits(spec: Spec, sigma0: float, level: str) -> bool:
         return False                 # RK4 lands neither on alpha's kinks nor on the band
     if g.dither != "none" and not g.omega_min > 0:
         return False
-    from .fixed_step import relaxation_factor
-
     h = g.largest_step(FIXED_STEPS[level], FIXED_H[level])
     fc = spec.params.fc or system_defaults(spec.system)["fc"]
     rate = sigma0 * relaxation_factor(spec) * (2.0 * g.v_max + g.W_max) / fc

@@ -86,7 +86,7 @@ def test_a_stateless_law_on_the_contact_keeps_the_reference_promise_at_high_omeg
     assert abs(got - ref) / max(abs(ref), 1e-3) <= TARGET_ERROR["reference"], (got, ref)
 
 
-def test_an_explicit_accuracy_on_the_contact_takes_its_natural_units_unless_told():
+def test_an_explicit_accuracy_on_the_contact_takes_its_natural_units_unless_told(references):
     """The same trap for explicit numerics: ``{integrator = "dopri5", rtol = ...}`` without
     ``atol_units`` takes the system's own (natural on the contact, absolute elsewhere); one
     that names "absolute" keeps it, and is another sweep. On the slider, not naming it and
@@ -103,9 +103,6 @@ def test_an_explicit_accuracy_on_the_contact_takes_its_natural_units_unless_told
     assert same[0].sweep_id == same[1].sweep_id
     res = run_block(plans[0].scene, plans[0].points, plans[0].params,
                     plans[0].numerics.settings)
-    d = P.unpack(plans[0].params)
-    d.update(W=3e-3, omega=1000.0, v_ref=1e-3)
-    ref = R.contact(d, "lugre", float(plans[0].params[P.T_END]),
-                    float(plans[0].params[P.T_TRANSIENT]))["F_mean"]
+    ref = references[1e-3, 1000.0]   # (the same point and window)
     got = float(np.asarray(res.outputs["F_mean"])[0])
     assert abs(got - ref) / abs(ref) <= TARGET_ERROR["reference"], (got, ref)
